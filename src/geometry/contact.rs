@@ -1,0 +1,120 @@
+//! What a reconstruction returns: [`ContactConfiguration`] and its [`ContactPatch`]es.
+
+use super::touch_mesh::Feature;
+use crate::math::{Real, Vector};
+
+/// The configuration of the pair at the current pose (the paper's Fig. 1).
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum TouchState {
+    /// The surfaces do not meet (and neither object is inside the other).
+    Separated,
+    /// The surfaces meet without interpenetrating (Fig. 1 b): nothing to correct.
+    Touching,
+    /// The objects interpenetrate (Fig. 1 a): apply the reversing vector.
+    Penetrating,
+    /// During the step the moving object passed into and out of the fixed one (Fig. 1 c): the
+    /// current pose does not penetrate but the step went through. The reversing vector still
+    /// leads back to the first touch; callers should split the step (see
+    /// [`crate::geometry::safe_step_length`]) or stop there.
+    Perforated,
+}
+
+/// How a contact region touches (the paper's vertex, line and polygon contacts).
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum ContactKind {
+    /// The region is a single point.
+    Vertex,
+    /// The region is a segment (a line contact).
+    Edge,
+    /// The region is a polygon (a face contact).
+    Face,
+}
+
+/// Where the reconstruction's direction of travel came from.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum DirectionSource {
+    /// The moving object's own translation over the step (`D`).
+    Trajectory,
+    /// The object did not translate (`D = 0`): the fallback direction was used (see
+    /// [`crate::geometry::ReconstructionOptions::zero_motion_direction`]).
+    ZeroMotionFallback,
+}
+
+/// One touching point at the first-touch configuration.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct ContactPoint {
+    /// World-space point, with the moving object at its first-touch pose (current pose plus
+    /// the reversing vector).
+    pub point: Vector,
+    /// The feature of the fixed mesh that touches.
+    pub fixed_feature: Feature,
+    /// The feature of the moving mesh that touches.
+    pub moving_feature: Feature,
+}
+
+/// A connected contact region at first touch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactPatch {
+    /// Vertex, edge (line) or face (polygon) contact.
+    pub kind: ContactKind,
+    /// World-space unit normal, pointing out of the fixed object toward the moving one.
+    pub normal: Vector,
+    /// The region's shape in world space at first touch: one point for a vertex contact, the
+    /// two ends of the segment for an edge contact, the convex polygon (counter-clockwise about
+    /// `normal`) for a face contact.
+    pub polygon: Vec<Vector>,
+    /// Every touching point of the region, with the features on both meshes.
+    pub points: Vec<ContactPoint>,
+    /// The fixed mesh's features involved (sorted, unique).
+    pub fixed_features: Vec<Feature>,
+    /// The moving mesh's features involved (sorted, unique).
+    pub moving_features: Vec<Feature>,
+}
+
+impl ContactPatch {
+    /// The centroid of the region's polygon.
+    pub fn center(&self) -> Vector {
+        self.polygon.iter().copied().sum::<Vector>() / self.polygon.len().max(1) as Real
+    }
+}
+
+/// The reconstructed contact configuration of a fixed and a moving object.
+///
+/// Apply [`ContactConfiguration::reversing_vector`] to the moving object's translation to bring
+/// it back, along its own trajectory, to the configuration where it first touched.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactConfiguration {
+    /// The configuration at the current pose.
+    pub state: TouchState,
+    /// World-space translation that takes the moving object from its current pose back to first
+    /// touch. Parallel to `-D` (zero when separated or touching).
+    pub reversing_vector: Vector,
+    /// `|reversing_vector|`: the penetration depth measured along the trajectory (the paper's
+    /// maximum `d_ij`).
+    pub depth: Real,
+    /// World-space unit direction of travel `D_u` the reconstruction used.
+    pub direction: Vector,
+    /// Whether `direction` is the object's own motion or the zero-motion fallback.
+    pub direction_source: DirectionSource,
+    /// `true` when the first touch lies on this step's trajectory. `false` when the object
+    /// already penetrated at the start of the step (or only its rotation caused the
+    /// penetration): the reversing vector then goes back past the start of the step, to the
+    /// nearest non-penetrating pose along `-D`.
+    pub on_trajectory: bool,
+    /// Fraction of the step at which the first touch happened (0 = previous pose, 1 = current
+    /// pose); `None` when it is not on this step's trajectory or the state is `Separated`.
+    pub time_of_impact: Option<Real>,
+    /// The contact regions at first touch (several for non-convex objects touching in several
+    /// places). Empty when separated.
+    pub patches: Vec<ContactPatch>,
+    /// Number of candidate triangle pairs the BVHs let through (a measure of the work done).
+    pub candidate_pairs: usize,
+}
+
+impl ContactConfiguration {
+    /// `true` if the state is [`TouchState::Penetrating`] or [`TouchState::Perforated`]: the
+    /// current pose must be corrected.
+    pub fn needs_correction(&self) -> bool {
+        matches!(self.state, TouchState::Penetrating | TouchState::Perforated)
+    }
+}

@@ -1,0 +1,60 @@
+//! # rapier_touch
+//!
+//! Exact touch contacts and filtered soft surfaces for [rapier3d](https://rapier.rs).
+//!
+//! When two polyhedral objects interpenetrate, [`geometry::Reconstructor`] walks the moving one
+//! back along its own trajectory (inverse trajectory mapping) to the configuration where it
+//! first touched, returns the *reversing vector*, and says what touches: vertex, edge or face,
+//! with the contact polygon and the mesh features on both sides.
+//!
+//! ## Quick start
+//! ```
+//! use rapier_touch::prelude::*;
+//!
+//! // A fixed floor slab and a cube that fell 0.5 m during the last step and now sinks 0.2 m.
+//! let floor = TouchMesh::from_shape(&Cuboid::new(Vector::new(2.0, 0.5, 2.0))).unwrap();
+//! let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
+//! let floor_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+//! let now = Pose::from_translation(Vector::new(0.3, 0.3, 0.0));
+//! let before = Pose::from_translation(Vector::new(0.3, 0.8, 0.0));
+//!
+//! let mut rec = Reconstructor::default();
+//! let contact = rec.reconstruct(&floor, &floor_pose, &cube, &now, &before).unwrap();
+//! assert_eq!(contact.state, TouchState::Penetrating);
+//! // Moving the cube by the reversing vector puts it exactly on the floor.
+//! assert!((contact.reversing_vector - Vector::new(0.0, 0.2, 0.0)).length() < 1e-5);
+//! let patch = &contact.patches[0];
+//! assert_eq!(patch.kind, ContactKind::Face);
+//! assert_eq!(patch.polygon.len(), 4); // the cube's bottom square
+//! ```
+//!
+//! ## Layers
+//! Lower layers never name a rapier handle or set:
+//! - [`geometry`]: pure geometry, the paper's eq. (1)-(3) (no pipeline).
+//!
+//! ## Caveats
+//! - A body that also rotated over the step is walked back along `-D` at its *current*
+//!   orientation. If that pose still penetrates, the reversal continues past the step's start
+//!   to the nearest non-penetrating pose ([`geometry::ContactConfiguration::on_trajectory`]).
+//! - With no translation (`D = 0`) a fallback direction is used
+//!   ([`geometry::ReconstructionOptions::zero_motion_direction`]).
+//! - "One object wholly inside the other" is detected only for closed meshes; open meshes
+//!   (a floor of zero thickness) are shells.
+#![warn(missing_docs)]
+
+pub use parry3d;
+pub use rapier3d;
+
+pub mod geometry;
+pub mod math;
+
+/// Everything a user needs, in one import.
+pub mod prelude {
+    pub use crate::geometry::{
+        safe_step_length, ContactConfiguration, ContactKind, ContactPatch, ContactPoint,
+        DirectionSource, Feature, ReconstructionError, ReconstructionOptions, Reconstructor,
+        TouchMesh, TouchMeshError, TouchState,
+    };
+    pub use crate::math::{Pose, Real, Rotation, Vector};
+    pub use parry3d::shape::{ConvexPolyhedron, Cuboid, TriMesh};
+}

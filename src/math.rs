@@ -1,0 +1,3 @@
+//! The math types at the crate's boundary: rapier's own (glam via glamx).
+
+pub use rapier3d::math::{Pose, Real, Rotation, Vector};
