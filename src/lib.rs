@@ -47,6 +47,7 @@ pub use rapier3d;
 
 pub mod geometry;
 pub mod math;
+pub mod scenes;
 
 /// Everything a user needs, in one import.
 pub mod prelude {

@@ -66,7 +66,7 @@ pub(crate) fn build_patches(
     let tol = fr.tol;
     // One entry per feature pair, then one per location (keeping the lowest-dimensional
     // features: a vertex on a vertex is found by several triangles and edges).
-    events.sort_by(|a, b| (a.fixed, a.moving).cmp(&(b.fixed, b.moving)));
+    events.sort_by_key(|e| (e.fixed, e.moving));
     events.dedup_by(|a, b| a.fixed == b.fixed && a.moving == b.moving);
     events.sort_by_key(|e| e.fixed.dimension() + e.moving.dimension());
     let mut kept: Vec<Event> = Vec::with_capacity(events.len());
@@ -183,11 +183,11 @@ fn classify(pts: &[DVec3], normal: DVec3, tol: f64) -> (ContactKind, Vec<DVec3>)
         }
         return (ContactKind::Edge, vec![lo, hi]);
     }
-    (ContactKind::Face, convex_hull_on_plane(pts, normal))
+    (ContactKind::Face, convex_hull_on_plane(pts, normal, tol))
 }
 
 /// Andrew's monotone chain on the plane orthogonal to `n`; counter-clockwise about `n`.
-fn convex_hull_on_plane(pts: &[DVec3], n: DVec3) -> Vec<DVec3> {
+fn convex_hull_on_plane(pts: &[DVec3], n: DVec3, tol: f64) -> Vec<DVec3> {
     let t1 = n.any_orthonormal_vector();
     let t2 = n.cross(t1);
     let mut p: Vec<(f64, f64, usize)> = pts
@@ -196,8 +196,11 @@ fn convex_hull_on_plane(pts: &[DVec3], n: DVec3) -> Vec<DVec3> {
         .map(|(i, q)| (q.dot(t1), q.dot(t2), i))
         .collect();
     p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let cross = |o: (f64, f64, usize), a: (f64, f64, usize), b: (f64, f64, usize)| {
-        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    // Twice the signed area of (o, a, b), less `tol` times |ob|: `a` is dropped when it lies
+    // within `tol` of the line o-b (collinear points are not polygon corners).
+    let turn = |o: (f64, f64, usize), a: (f64, f64, usize), b: (f64, f64, usize)| {
+        let area2 = (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
+        area2 - tol * (b.0 - o.0).hypot(b.1 - o.1)
     };
     let mut hull: Vec<(f64, f64, usize)> = Vec::with_capacity(p.len() * 2);
     for pass in 0..2 {
@@ -209,7 +212,7 @@ fn convex_hull_on_plane(pts: &[DVec3], n: DVec3) -> Vec<DVec3> {
         };
         for &q in iter {
             while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+                && turn(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
             {
                 hull.pop();
             }

@@ -7,6 +7,7 @@
 
 mod classify;
 mod contact;
+pub mod generators;
 mod reconstruction;
 mod touch_mesh;
 

@@ -774,7 +774,7 @@ fn sample_inside(
 ) -> Option<bool> {
     let n = sampled.num_triangles();
     for k in 0..n.min(4) {
-        let t = (k * n / n.min(4).max(1)) as u32;
+        let t = (k * n / n.clamp(1, 4)) as u32;
         let [a, b, c] = sampled.indices()[t as usize].map(|v| sampled.vertices()[v as usize]);
         let centroid = (a + b + c) / 3.0;
         if let Some(inside) = point_in_closed_mesh(other, to_other(centroid)) {
