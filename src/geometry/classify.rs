@@ -196,11 +196,8 @@ fn convex_hull_on_plane(pts: &[DVec3], n: DVec3, tol: f64) -> Vec<DVec3> {
         .map(|(i, q)| (q.dot(t1), q.dot(t2), i))
         .collect();
     p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    // Twice the signed area of (o, a, b), less `tol` times |ob|: `a` is dropped when it lies
-    // within `tol` of the line o-b (collinear points are not polygon corners).
     let turn = |o: (f64, f64, usize), a: (f64, f64, usize), b: (f64, f64, usize)| {
-        let area2 = (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
-        area2 - tol * (b.0 - o.0).hypot(b.1 - o.1)
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
     };
     let mut hull: Vec<(f64, f64, usize)> = Vec::with_capacity(p.len() * 2);
     for pass in 0..2 {
@@ -219,6 +216,18 @@ fn convex_hull_on_plane(pts: &[DVec3], n: DVec3, tol: f64) -> Vec<DVec3> {
             hull.push(q);
         }
         hull.pop();
+    }
+    // Corners within `tol` of the line through their neighbours are not corners.
+    let mut k = 0;
+    while hull.len() > 3 && k < hull.len() {
+        let m = hull.len();
+        let (o, a, b) = (hull[(k + m - 1) % m], hull[k], hull[(k + 1) % m]);
+        let len = (b.0 - o.0).hypot(b.1 - o.1);
+        if len > 0.0 && turn(o, a, b).abs() / len <= tol {
+            hull.remove(k);
+        } else {
+            k += 1;
+        }
     }
     hull.into_iter().map(|(_, _, i)| pts[i]).collect()
 }

@@ -1,0 +1,6 @@
+//! One integration-test binary (links once): a module per layer and claim.
+
+mod common;
+mod fig4;
+mod reconstruction_bad_input;
+mod reconstruction_properties;

@@ -1,0 +1,218 @@
+//! Property tests of the reconstruction over random convex polyhedra, random non-convex closed
+//! meshes, random poses and motions: after the reversing vector the objects touch without
+//! penetrating, a further step along D penetrates, the reversing vector is parallel to -D, it
+//! agrees with parry's linear shape cast for convex pairs, and swapping which object moves
+//! gives the same contact.
+
+use crate::common::{shifted, surface_distance, surfaces_intersect};
+use parry3d::query::{self, ShapeCastOptions};
+use proptest::prelude::*;
+use rapier_touch::geometry::generators::icosphere;
+use rapier_touch::prelude::*;
+
+fn vec3() -> impl Strategy<Value = Vector> {
+    (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0).prop_map(|(x, y, z)| Vector::new(x, y, z))
+}
+
+fn rotation() -> impl Strategy<Value = Rotation> {
+    (vec3(), 0.0f32..std::f32::consts::PI).prop_map(|(axis, angle)| {
+        Rotation::from_axis_angle(axis.try_normalize().unwrap_or(Vector::X), angle)
+    })
+}
+
+fn direction() -> impl Strategy<Value = Vector> {
+    vec3().prop_filter_map("non-zero", |v| v.try_normalize())
+}
+
+/// A random convex polyhedron, as a parry support-map shape and as the touch mesh of the
+/// same hull (parry's `convex_hull` triangles; `ConvexPolyhedron::to_trimesh` would triangulate
+/// merged, slightly non-planar faces that dip up to ~3e-4 inside the true hull).
+fn convex() -> impl Strategy<Value = (ConvexPolyhedron, TouchMesh)> {
+    prop::collection::vec(vec3(), 8..20).prop_filter_map("non-degenerate hull", |pts| {
+        let c = ConvexPolyhedron::from_convex_hull(&pts)?;
+        let e = parry3d::shape::Shape::compute_local_aabb(&c).extents();
+        let (v, i) = parry3d::transformation::convex_hull(&pts);
+        (e.min_element() > 0.3).then(|| (c, TouchMesh::new(v, i).unwrap()))
+    })
+}
+
+/// A star-shaped closed mesh: an icosphere whose vertices are pushed in or out.
+fn lumpy_sphere() -> impl Strategy<Value = TouchMesh> {
+    prop::collection::vec(0.6f32..1.3, 42).prop_map(|radii| {
+        let (v, i) = icosphere(1.0, 1);
+        let v = v.iter().zip(&radii).map(|(p, r)| *p * *r).collect();
+        TouchMesh::new(v, i).unwrap()
+    })
+}
+
+/// Places `moving` (orientation `rot`) `pen` past its first touch with `fixed` along `u`,
+/// starting 4 m away with a lateral offset. Returns (prev, now, exact first-touch pose), or
+/// `None` when the path misses.
+fn approach(
+    fixed: &dyn parry3d::shape::Shape,
+    pose_f: &Pose,
+    moving: &dyn parry3d::shape::Shape,
+    rot: Rotation,
+    u: Vector,
+    lateral: Vector,
+    pen: f32,
+) -> Option<(Pose, Pose, f32)> {
+    let lateral = lateral.reject_from(u) * 0.5;
+    let prev = Pose::from_parts(pose_f.translation - 4.0 * u + lateral, rot);
+    let hit = query::cast_shapes(
+        pose_f,
+        Vector::ZERO,
+        fixed,
+        &prev,
+        u,
+        moving,
+        ShapeCastOptions::with_max_time_of_impact(10.0),
+    )
+    .ok()??;
+    let now = shifted(&prev, (hit.time_of_impact + pen) * u);
+    Some((prev, now, hit.time_of_impact))
+}
+
+fn check_touching(
+    fixed: &TouchMesh,
+    pose_f: &Pose,
+    moving: &TouchMesh,
+    now: &Pose,
+    c: &ContactConfiguration,
+    u: Vector,
+) -> Result<(), TestCaseError> {
+    let scale = fixed.scale().max(moving.scale());
+    let at = shifted(now, c.reversing_vector);
+    // Parallel to -D.
+    prop_assert!(c.reversing_vector.cross(u).length() <= 1e-5 * c.depth.max(1e-3));
+    prop_assert!(c.reversing_vector.dot(u) <= 0.0);
+    // Touching.
+    let d = surface_distance(fixed, pose_f, moving, &at);
+    prop_assert!(d <= 1e-5 * scale, "distance after reversal {d}");
+    // Not penetrating: a hair behind, the surfaces are apart.
+    let behind = shifted(&at, -1e-4 * scale * u);
+    prop_assert!(
+        !surfaces_intersect(fixed, pose_f, moving, &behind),
+        "penetrates after reversal: distance behind {}, at {}, state {:?}, depth {}",
+        surface_distance(fixed, pose_f, moving, &behind),
+        d,
+        c.state,
+        c.depth
+    );
+    // A further epsilon along D penetrates.
+    let ahead = shifted(&at, 1e-3 * scale * u);
+    prop_assert!(
+        surfaces_intersect(fixed, pose_f, moving, &ahead),
+        "epsilon ahead does not touch"
+    );
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+    #[test]
+    fn convex_pairs_touch_after_reversal_and_agree_with_shape_cast(
+        (a, fixed) in convex(), (b, moving) in convex(), rf in rotation(), rm in rotation(),
+        u in direction(), lateral in vec3(), frac in 0.02f32..0.4,
+    ) {
+        let pose_f = Pose::from_parts(Vector::new(0.3, -0.2, 0.1), rf);
+        let pen = frac * safe_step_length(&fixed, &moving);
+        let Some((prev, now, toi)) = approach(&a, &pose_f, &b, rm, u, lateral, pen) else {
+            return Err(TestCaseError::reject("path misses"));
+        };
+        let mut rec = Reconstructor::default();
+        let c = rec.reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
+        prop_assert_eq!(c.state, TouchState::Penetrating);
+        prop_assert!(c.on_trajectory);
+        // Agrees with parry's linear shape cast from the pre-step pose.
+        let len = toi + pen;
+        check_touching(&fixed, &pose_f, &moving, &now, &c, u)?;
+        let cast_pose = shifted(&now, -pen * u);
+        let ours = shifted(&now, c.reversing_vector);
+        let contact_dist = |p: &Pose| {
+            parry3d::query::contact(&pose_f, &a, p, &b, 0.01).ok().flatten().map(|c| c.dist)
+        };
+        prop_assert!(
+            (c.depth - pen).abs() <= 1e-4 * len,
+            "depth {} vs cast {} (len {}): parry contact dist at the cast's pose {:?}, at ours {:?}",
+            c.depth,
+            pen,
+            len,
+            contact_dist(&cast_pose),
+            contact_dist(&ours)
+        );
+        prop_assert!(!c.patches.is_empty());
+
+        // Swapping which object moves: the other one moved by -D.
+        let d = now.translation - prev.translation;
+        let s = rec.reconstruct(&moving, &now, &fixed, &pose_f, &shifted(&pose_f, d)).unwrap();
+        prop_assert_eq!(s.state, TouchState::Penetrating);
+        prop_assert!((s.depth - c.depth).abs() <= 1e-5 * fixed.scale().max(moving.scale()));
+        prop_assert!((s.reversing_vector + c.reversing_vector).length() <= 1e-5 * len);
+        let mut k1: Vec<_> = c.patches.iter().map(|p| p.kind as u8).collect();
+        let mut k2: Vec<_> = s.patches.iter().map(|p| p.kind as u8).collect();
+        k1.sort();
+        k2.sort();
+        prop_assert_eq!(k1, k2);
+    }
+
+    #[test]
+    fn non_convex_pairs_touch_after_reversal(
+        fixed in lumpy_sphere(), moving in lumpy_sphere(), rf in rotation(), rm in rotation(),
+        u in direction(), lateral in vec3(), frac in 0.02f32..0.3,
+    ) {
+        let pose_f = Pose::from_parts(Vector::ZERO, rf);
+        let pen = frac;
+        let Some((prev, now, _)) = approach(
+            fixed.trimesh(), &pose_f, moving.trimesh(), rm, u, lateral, pen,
+        ) else {
+            return Err(TestCaseError::reject("path misses"));
+        };
+        let mut rec = Reconstructor::default();
+        let c = rec.reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
+        prop_assert!(c.needs_correction(), "state {:?}", c.state);
+        prop_assert!((c.depth - pen).abs() <= 1e-4 * (4.0 + pen), "depth {} vs cast {}", c.depth, pen);
+        check_touching(&fixed, &pose_f, &moving, &now, &c, u)?;
+
+        let d = now.translation - prev.translation;
+        let s = rec.reconstruct(&moving, &now, &fixed, &pose_f, &shifted(&pose_f, d)).unwrap();
+        prop_assert!((s.depth - c.depth).abs() <= 1e-5 * fixed.scale().max(moving.scale()));
+        prop_assert_eq!(s.patches.len(), c.patches.len());
+    }
+
+    /// A body that also rotated over the step is walked back at its current orientation and
+    /// still ends touching without penetrating.
+    #[test]
+    fn rotation_over_the_step_still_ends_touching(
+        (a, fixed) in convex(), (b, moving) in convex(), rm in rotation(), spin in rotation(),
+        u in direction(), lateral in vec3(), frac in 0.02f32..0.4,
+    ) {
+        let pose_f = Pose::IDENTITY;
+        let pen = frac * safe_step_length(&fixed, &moving);
+        let Some((prev, now, _)) = approach(&a, &pose_f, &b, rm, u, lateral, pen) else {
+            return Err(TestCaseError::reject("path misses"));
+        };
+        let prev = Pose::from_parts(prev.translation, spin * prev.rotation);
+        let c = Reconstructor::default().reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
+        prop_assert!(c.needs_correction());
+        check_touching(&fixed, &pose_f, &moving, &now, &c, u)?;
+    }
+
+    /// With no translation the fallback direction still ends touching.
+    #[test]
+    fn zero_motion_falls_back_and_ends_touching(
+        (a, fixed) in convex(), (b, moving) in convex(), rm in rotation(), u in direction(), frac in 0.05f32..0.4,
+    ) {
+        let pen = frac * safe_step_length(&fixed, &moving);
+        let Some((_, now, _)) = approach(&a, &Pose::IDENTITY, &b, rm, u, Vector::ZERO, pen) else {
+            return Err(TestCaseError::reject("path misses"));
+        };
+        let c = Reconstructor::default()
+            .reconstruct(&fixed, &Pose::IDENTITY, &moving, &now, &now)
+            .unwrap();
+        prop_assert_eq!(c.direction_source, DirectionSource::ZeroMotionFallback);
+        prop_assert_eq!(c.state, TouchState::Penetrating);
+        check_touching(&fixed, &Pose::IDENTITY, &moving, &now, &c, c.direction)?;
+    }
+}
