@@ -62,7 +62,7 @@ pub fn subdivided_box(half_extents: Vector, n: u32) -> MeshBuffers {
 /// An icosphere: an icosahedron whose triangles are split `subdivisions` times (each split
 /// multiplies the triangle count by 4), projected on the sphere.
 pub fn icosphere(radius: Real, subdivisions: u32) -> MeshBuffers {
-    let t = (1.0 + (5.0 as Real).sqrt()) / 2.0;
+    let t = (1.0 + Real::sqrt(5.0)) / 2.0;
     let mut verts: Vec<Vector> = [
         [-1.0, t, 0.0],
         [1.0, t, 0.0],

@@ -695,11 +695,18 @@ fn edge_edge(
 pub(crate) fn tri_feature(mesh: &TouchMesh, t: u32, bary: [f64; 3]) -> Feature {
     const SNAP: f64 = 1.0e-7;
     let idx = mesh.indices()[t as usize];
-    let on: Vec<usize> = (0..3).filter(|&k| bary[k] > SNAP).collect();
-    match on.as_slice() {
-        [k] => Feature::Vertex(idx[*k]),
-        [a, b] => {
-            let (x, y) = (idx[*a], idx[*b]);
+    let mut on = [0usize; 3];
+    let mut n = 0;
+    for (k, &b) in bary.iter().enumerate() {
+        if b > SNAP {
+            on[n] = k;
+            n += 1;
+        }
+    }
+    match n {
+        1 => Feature::Vertex(idx[on[0]]),
+        2 => {
+            let (x, y) = (idx[on[0]], idx[on[1]]);
             Feature::Edge([x.min(y), x.max(y)])
         }
         _ => Feature::Face(t),
