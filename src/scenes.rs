@@ -1,6 +1,6 @@
 //! Reference scenes shared by the examples, tests and benchmarks (fixed, deterministic).
 
-use crate::geometry::generators::{extruded_polygon, subdivided_box};
+use crate::geometry::generators::{extruded_polygon, icosphere, subdivided_box};
 use crate::geometry::{ContactKind, TouchMesh};
 use crate::math::{Pose, Real, Rotation, Vector};
 
@@ -38,10 +38,10 @@ pub fn fig4_scenes() -> Vec<ContactScene> {
     let floor = cuboid(Vector::new(2.0, 0.5, 2.0));
     let floor_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
     let cube = cuboid(Vector::splat(0.5));
-    let half_diag = (0.5 as Real) * (2.0 as Real).sqrt();
+    let half_diag = 0.5 * Real::sqrt(2.0);
     let rot_edge = Rotation::from_rotation_z(std::f32::consts::FRAC_PI_4);
     let rot_vertex = Rotation::from_rotation_arc(Vector::NEG_ONE.normalize(), Vector::NEG_Y);
-    let corner = (0.5 as Real) * (3.0 as Real).sqrt();
+    let corner = 0.5 * Real::sqrt(3.0);
 
     // (d): a fixed U-shaped block with two plateaus, and a moving bar with two V-shaped tips,
     // tilted so each tip touches with a single corner.
@@ -131,4 +131,227 @@ pub fn fig4_scenes() -> Vec<ContactScene> {
             expected_reversing: Vector::new(0.0, 0.05, 0.0),
         },
     ]
+}
+
+/// One of the four pairs whose sizes reproduce the paper's Table I (benchmarked in
+/// `benches/reconstruction.rs`).
+///
+/// Sizes are "colliding edges / colliding vertices" as a collision detector like RAPID reports
+/// them: see [`colliding_features`].
+#[derive(Clone, Debug)]
+pub struct Table1Scene {
+    /// Short name.
+    pub name: &'static str,
+    /// What the scene shows.
+    pub description: &'static str,
+    /// The fixed object (closed).
+    pub fixed: TouchMesh,
+    /// Its pose.
+    pub fixed_pose: Pose,
+    /// The moving object (closed).
+    pub moving: TouchMesh,
+    /// Its pose after the step (penetrating).
+    pub pose: Pose,
+    /// Its pose before the step.
+    pub prev_pose: Pose,
+    /// The paper's colliding-edge count for this row of Table I.
+    pub paper_edges: usize,
+    /// The paper's colliding-vertex count for this row of Table I.
+    pub paper_vertices: usize,
+    /// The colliding edges of this scene, measured by [`colliding_features`] at `pose`.
+    pub colliding_edges: usize,
+    /// The colliding vertices of this scene, measured by [`colliding_features`] at `pose`.
+    pub colliding_vertices: usize,
+}
+
+/// The moving object's translation over the step in every [`table1_scenes`] scene: 5 cm
+/// down, slightly slanted (so `D` is not axis-aligned).
+const TABLE1_STEP: Vector = Vector::new(0.01, -0.05, -0.005);
+
+/// Four penetrating pairs whose sizes reproduce the rows of the paper's Table I: about
+/// 32/22, 54/31, 409/205 and 1062/502 colliding edges / colliding vertices (see
+/// [`colliding_features`]; each scene stores the paper's numbers and its own measured ones).
+///
+/// Every fixed object is a box of 1 m × 0.5 m × 1 m whose top face lies at `y = 0`, split
+/// into `n × n` quads per face; every moving object is closed and moved by
+/// `D = (0.01, -0.05, -0.005)` m over the step, ending a few centimetres deep.
+///
+/// 1. `comb_3pt`: a three-tipped comb (extruded polygon, 40 triangles), tilted so each tip
+///    touches with one corner, 1 cm deep in a box split 4 × 4 per face (192 triangles): three
+///    vertex contacts.
+/// 2. `cube_face`: a 0.2 m cube split 3 × 3 per face (108 triangles), lying flat (turned
+///    about `y`), 2 cm deep in the same 192-triangle box: a face contact.
+/// 3. `ball_192`: a 0.2 m-radius icosphere (20480 triangles), 3 cm deep in a box split 4 × 4
+///    per face (192 triangles).
+/// 4. `ball_49k`: a 0.35 m-radius icosphere (20480 triangles), 3.5 cm deep in a box split
+///    64 × 64 per face (49152 triangles).
+///
+/// Deterministic: no randomness.
+pub fn table1_scenes() -> Vec<Table1Scene> {
+    let block = |n: u32| {
+        let (v, i) = subdivided_box(Vector::new(0.5, 0.25, 0.5), n);
+        TouchMesh::new(v, i).expect("a box is a valid mesh")
+    };
+    let block_pose = Pose::from_translation(Vector::new(0.0, -0.25, 0.0));
+    let ball = |r: Real| {
+        let (v, i) = icosphere(r, 5);
+        TouchMesh::new(v, i).expect("an icosphere is a valid mesh")
+    };
+    let ball_rot = Rotation::from_rotation_x(0.3)
+        * Rotation::from_rotation_y(0.2)
+        * Rotation::from_rotation_z(0.1);
+
+    // A comb with three V-shaped tips at x = -0.25, 0, 0.25 (tips at y = 0), 0.2 m deep in z.
+    let (cv, ci) = extruded_polygon(
+        &[
+            [-0.25, 0.0],
+            [-0.2, 0.1],
+            [-0.05, 0.1],
+            [0.0, 0.0],
+            [0.05, 0.1],
+            [0.2, 0.1],
+            [0.25, 0.0],
+            [0.3, 0.1],
+            [0.3, 0.2],
+            [-0.3, 0.2],
+            [-0.3, 0.1],
+        ],
+        0.2,
+    )
+    .expect("valid outline");
+    let comb = TouchMesh::new(cv, ci).expect("valid mesh");
+    // Tilted about x: the z = +0.1 end of each tip is the lowest point, 0.1 sin(tilt) below
+    // the tip line.
+    let tilt: Real = 0.3;
+    let comb_low = 0.1 * tilt.sin();
+
+    let (qv, qi) = subdivided_box(Vector::splat(0.1), 3);
+    let cube = TouchMesh::new(qv, qi).expect("a box is a valid mesh");
+
+    // Measures the scene's colliding features and fills in the previous pose.
+    let scene = |name: &'static str,
+                 description: &'static str,
+                 fixed: TouchMesh,
+                 moving: TouchMesh,
+                 pose: Pose,
+                 (paper_edges, paper_vertices): (usize, usize)| {
+        let (colliding_edges, colliding_vertices) =
+            colliding_features(&fixed, &block_pose, &moving, &pose);
+        Table1Scene {
+            name,
+            description,
+            fixed,
+            fixed_pose: block_pose,
+            moving,
+            pose,
+            prev_pose: Pose::from_parts(pose.translation - TABLE1_STEP, pose.rotation),
+            paper_edges,
+            paper_vertices,
+            colliding_edges,
+            colliding_vertices,
+        }
+    };
+
+    vec![
+        scene(
+            "comb_3pt",
+            "a tilted three-tipped comb sinks 1 cm into a box: three vertex contacts",
+            block(4),
+            comb,
+            Pose::from_parts(
+                Vector::new(0.03, comb_low - 0.01, -0.02),
+                Rotation::from_rotation_x(tilt),
+            ),
+            (32, 22),
+        ),
+        scene(
+            "cube_face",
+            "a finely split cube lying flat sinks 2 cm into a split box: face contact",
+            block(4),
+            cube,
+            Pose::from_parts(
+                Vector::new(0.11, 0.1 - 0.02, 0.07),
+                Rotation::from_rotation_y(0.5),
+            ),
+            (54, 31),
+        ),
+        scene(
+            "ball_192",
+            "a 20480-triangle icosphere sinks 3 cm into a 192-triangle box",
+            block(4),
+            ball(0.2),
+            Pose::from_parts(Vector::new(0.013, 0.2 - 0.03, -0.021), ball_rot),
+            (409, 205),
+        ),
+        scene(
+            "ball_49k",
+            "a 20480-triangle icosphere sinks 3.5 cm into a 49152-triangle box",
+            block(64),
+            ball(0.35),
+            Pose::from_parts(Vector::new(0.013, 0.35 - 0.035, -0.021), ball_rot),
+            (1062, 502),
+        ),
+    ]
+}
+
+/// Counts the colliding features of a pair at the given poses, as `(edges, vertices)`: the
+/// distinct edges and vertices, summed over both meshes, of every triangle that intersects a
+/// triangle of the other mesh (what a triangle-level collision detector such as RAPID
+/// reports).
+///
+/// Candidates come from a simultaneous traversal of the two parry BVHs; each candidate pair is
+/// then checked with parry's exact triangle-triangle intersection test.
+///
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::scenes::colliding_features;
+/// let slab = TouchMesh::from_shape(&Cuboid::new(Vector::new(2.0, 0.5, 2.0))).unwrap();
+/// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
+/// let slab_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+/// // Far apart: nothing collides.
+/// let away = Pose::from_translation(Vector::new(0.0, 3.0, 0.0));
+/// assert_eq!(colliding_features(&slab, &slab_pose, &cube, &away), (0, 0));
+/// // Sinking 0.1 m: some triangles of each mesh cross.
+/// let sunk = Pose::from_translation(Vector::new(0.1, 0.4, 0.2));
+/// let (edges, vertices) = colliding_features(&slab, &slab_pose, &cube, &sunk);
+/// assert!(edges > 0 && vertices > 0);
+/// ```
+pub fn colliding_features(
+    fixed: &TouchMesh,
+    fixed_pose: &Pose,
+    moving: &TouchMesh,
+    pose: &Pose,
+) -> (usize, usize) {
+    use parry3d::bounding_volume::BoundingVolume;
+    use std::collections::BTreeSet;
+
+    // The moving mesh in the fixed mesh's frame.
+    let pos12 = fixed_pose.inv_mul(pose);
+    let (fbvh, mbvh) = (fixed.bvh(), moving.bvh());
+    let mut hit_f = BTreeSet::new();
+    let mut hit_m = BTreeSet::new();
+    for (tf, tm) in fbvh.leaf_pairs(mbvh, |nf, nm| {
+        nm.aabb().transform_by(&pos12).intersects(&nf.aabb())
+    }) {
+        let tri_f = fixed.trimesh().triangle(tf);
+        let tri_m = moving.trimesh().triangle(tm);
+        let hit = parry3d::query::intersection_test(&Pose::IDENTITY, &tri_f, &pos12, &tri_m)
+            .is_ok_and(|r| r.intersecting);
+        if hit {
+            hit_f.insert(tf);
+            hit_m.insert(tm);
+        }
+    }
+    let count = |mesh: &TouchMesh, tris: &BTreeSet<u32>| -> (usize, usize) {
+        let mut edges = BTreeSet::new();
+        let mut vertices = BTreeSet::new();
+        for &t in tris {
+            edges.extend(mesh.triangle_edges(t));
+            vertices.extend(mesh.indices()[t as usize]);
+        }
+        (edges.len(), vertices.len())
+    };
+    let (ef, vf) = count(fixed, &hit_f);
+    let (em, vm) = count(moving, &hit_m);
+    (ef + em, vf + vm)
 }
