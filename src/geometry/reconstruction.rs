@@ -40,8 +40,9 @@ use super::touch_mesh::{Feature, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::partitioning::TraversalAction;
+use parry3d::partitioning::{BvhNode, TraversalAction};
 use parry3d::query::{Ray, RayCast};
+use std::cell::Cell;
 
 /// Why a reconstruction could not run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -282,17 +283,10 @@ impl Reconstructor {
             return Ok(result);
         }
         let s_max = s_hi.min(traj_len);
-        self.collect_events(fixed, moving, &fr, -tol, s_max);
+        // Only the largest touch matters for the first touch: a bounded search.
+        let first_touch = self.collect_first_touch(fixed, moving, &fr, -tol, s_max);
         result.candidate_pairs = self.ws.pairs.len();
-
         let pen0 = self.penetrating_at(fixed, moving, &fr, 0.0);
-        let first_touch = self
-            .ws
-            .events
-            .iter()
-            .map(|e| e.s)
-            .filter(|&s| s <= traj_len + tol)
-            .fold(f64::NEG_INFINITY, f64::max);
 
         let s_star;
         if pen0 {
@@ -302,30 +296,28 @@ impl Reconstructor {
             if valid && source == DirectionSource::Trajectory {
                 s_star = first_touch;
             } else {
-                // The first touch is not on this step: go back to the nearest separating pose.
-                result.on_trajectory = source == DirectionSource::Trajectory && valid;
-                if s_max < s_hi {
-                    self.collect_events(fixed, moving, &fr, -tol, s_hi);
+                // The first touch is not on this step: go back to the nearest separating pose,
+                // the last touch on the whole backward ray.
+                result.on_trajectory = false;
+                s_star = if s_max < s_hi {
+                    let s = self.collect_first_touch(fixed, moving, &fr, -tol, s_hi);
                     result.candidate_pairs = self.ws.pairs.len();
-                }
-                s_star = self
-                    .ws
-                    .events
-                    .iter()
-                    .map(|e| e.s)
-                    .fold(f64::NEG_INFINITY, f64::max);
+                    s
+                } else {
+                    first_touch
+                };
                 if !s_star.is_finite() {
                     // Containment with no surface on the ray: cannot happen for finite
                     // meshes, but never hand back a NaN.
                     return Ok(result);
                 }
-                if source == DirectionSource::ZeroMotionFallback {
-                    result.on_trajectory = false;
-                }
             }
         } else if first_touch > tol {
             // Not penetrating now but the surfaces met during the step: a perforation if the
-            // objects overlapped in between, otherwise a graze (or a touch now).
+            // objects overlapped in between, otherwise a graze (or a touch now). Rare, so every
+            // touch of the step is collected here.
+            self.collect_events(fixed, moving, &fr, -tol, s_max);
+            result.candidate_pairs = self.ws.pairs.len();
             if self.perforated_between(fixed, moving, &fr, first_touch) {
                 result.state = TouchState::Perforated;
                 s_star = first_touch;
@@ -362,6 +354,71 @@ impl Reconstructor {
             .collect();
         result.patches = build_patches(fixed, moving, &fr, selected, &to_world, rf);
         Ok(result)
+    }
+
+    /// The largest touch `s` in `[s_min, s_max]` (`-inf` if none), with every event within the
+    /// tolerance of it in `ws.events`. Branch and bound over both BVHs: a pair of boxes whose
+    /// overlap along the ray ends below the best touch so far cannot hold the first touch.
+    fn collect_first_touch(
+        &mut self,
+        fixed: &TouchMesh,
+        moving: &TouchMesh,
+        fr: &Frame,
+        s_min: f64,
+        s_max: f64,
+    ) -> f64 {
+        let ws = &mut self.ws;
+        ws.pairs.clear();
+        ws.events.clear();
+        let pos12 = Pose::from_parts(fr.tra.as_vec3(), fr.rot.as_quat());
+        let u = fr.u.as_vec3();
+        let tol = fr.tol;
+        let margin = (tol as Real) * 4.0 + 1e-6 * fixed.scale().max(moving.scale());
+        // Seed the bound with a touch that surely exists: each object's vertex deepest along
+        // the motion, cast back along the trajectory. Less a margin that covers f32 rounding,
+        // it is a lower bound of the first touch.
+        let seed = seed_first_touch(fixed, moving, fr, s_min, s_max)
+            .map_or(f64::NEG_INFINITY, |s| s - 10.0 * tol);
+        let best = Cell::new(seed);
+        let reach = |nf: &BvhNode, nm: &BvhNode| -> Option<f64> {
+            let m = nm.aabb().transform_by(&pos12);
+            let (lo, hi) = ray_overlap_interval(&m, &nf.aabb(), u, margin)?;
+            let (lo, hi) = ((lo as f64).max(s_min), (hi as f64).min(s_max));
+            (lo <= hi + tol).then_some(hi)
+        };
+        let check = |nf: &BvhNode, nm: &BvhNode| {
+            reach(nf, nm).is_some_and(|hi| hi >= best.get() - 2.0 * tol)
+        };
+        let (fbvh, mbvh) = (fixed.bvh(), moving.bvh());
+        for (tf, tm) in fbvh.leaf_pairs(mbvh, check) {
+            let (Some(nf), Some(nm)) = (fbvh.leaf_node(tf), mbvh.leaf_node(tm)) else {
+                continue;
+            };
+            if !check(nf, nm) {
+                continue;
+            }
+            ws.pairs.push((tf, tm));
+            let lo = s_min.max(best.get() - tol);
+            // Exact bound from each triangle's plane: past it the other triangle has left the
+            // plane, so no touch of this pair lies beyond (the boxes above are inflated by the
+            // rotation).
+            let pf = fixed_tri(fixed, tf);
+            let pm = moving.indices()[tm as usize].map(|v| moving_pt(ws, moving, fr, v));
+            if plane_bound(&pf, &pm, -fr.u).min(plane_bound(&pm, &pf, fr.u)) < lo - tol {
+                continue;
+            }
+            let found = pair_events(ws, fixed, moving, fr, tf, tm, lo, s_max);
+            if found > best.get() {
+                best.set(found);
+            }
+        }
+        let b = ws
+            .events
+            .iter()
+            .map(|e| e.s)
+            .fold(f64::NEG_INFINITY, f64::max);
+        ws.events.retain(|e| e.s >= b - tol);
+        b
     }
 
     /// Candidate pairs over `s ∈ [s_min, s_max]` and all three kinds of events in that range.
@@ -529,8 +586,16 @@ impl Reconstructor {
         s: f64,
     ) -> bool {
         let shift = -s * fr.u;
-        for k in 0..self.ws.pairs.len() {
-            let (tf, tm) = self.ws.pairs[k];
+        let pos12 = Pose::from_parts((fr.tra + shift).as_vec3(), fr.rot.as_quat());
+        let margin = (fr.tol as Real) * 4.0 + 1e-6 * fixed.scale().max(moving.scale());
+        let overlap = |nf: &BvhNode, nm: &BvhNode| {
+            nm.aabb()
+                .transform_by(&pos12)
+                .loosened(margin)
+                .intersects(&nf.aabb())
+        };
+        let (fbvh, mbvh) = (fixed.bvh(), moving.bvh());
+        for (tf, tm) in fbvh.leaf_pairs(mbvh, overlap) {
             let a = fixed_tri(fixed, tf);
             let b = moving.indices()[tm as usize]
                 .map(|v| moving_pt(&mut self.ws, moving, fr, v) + shift);
@@ -579,6 +644,169 @@ impl Reconstructor {
             .step_by(step)
             .any(|k| self.penetrating_at(fixed, moving, fr, mids[k]))
     }
+}
+
+/// The vertex of `mesh` farthest along `dir` (mesh frame) reached by hill climbing over the
+/// vertex graph from vertex 0: the support point on a convex mesh, a local maximum otherwise.
+fn support_vertex(mesh: &TouchMesh, dir: Vector) -> u32 {
+    let v = mesh.vertices();
+    let mut best = 0u32;
+    let mut best_d = v[0].dot(dir);
+    loop {
+        let mut improved = false;
+        for &w in mesh.vertex_neighbours(best) {
+            let d = v[w as usize].dot(dir);
+            if d > best_d {
+                best_d = d;
+                best = w;
+                improved = true;
+            }
+        }
+        if !improved {
+            return best;
+        }
+    }
+}
+
+/// A touch `s` in `[s_min, s_max]` found cheaply (or `None`): the moving object's deepest
+/// vertex against the fixed mesh, and the fixed object's deepest vertex against the moving
+/// mesh, each by one parry ray cast from the far end of the range.
+fn seed_first_touch(
+    fixed: &TouchMesh,
+    moving: &TouchMesh,
+    fr: &Frame,
+    s_min: f64,
+    s_max: f64,
+) -> Option<f64> {
+    let span = s_max - s_min;
+    if !(span.is_finite() && span >= 0.0) {
+        return None;
+    }
+    let inv = fr.rot.conjugate();
+    let mut best: Option<f64> = None;
+    // Moving vertex p walked back by s sits at p - s u: from p - s_max u toward +u.
+    let v = support_vertex(moving, (inv * fr.u).as_vec3());
+    let p = fr.moving_point(moving.vertices()[v as usize]);
+    let ray = Ray::new((p - s_max * fr.u).as_vec3(), fr.u.as_vec3());
+    if let Some(t) = fixed.trimesh().cast_local_ray(&ray, span as Real, false) {
+        best = Some(s_max - t as f64);
+    }
+    // Fixed vertex q against the moving mesh walked back by s: in the moving frame q sits at
+    // q' + s u', from q' + s_max u' toward -u'.
+    let w = support_vertex(fixed, (-fr.u).as_vec3());
+    let q = inv * (fixed.vertices()[w as usize].as_dvec3() - fr.tra);
+    let um = inv * fr.u;
+    let ray = Ray::new((q + s_max * um).as_vec3(), (-um).as_vec3());
+    if let Some(t) = moving.trimesh().cast_local_ray(&ray, span as Real, false) {
+        let s = s_max - t as f64;
+        best = Some(best.map_or(s, |b: f64| b.max(s)));
+    }
+    best
+}
+
+/// Largest `s` at which triangle `b`, moved by `s d` (unit `d`), can still meet the plane of
+/// triangle `a`; `+inf` when `d` is parallel to the plane or `a` is degenerate.
+fn plane_bound(a: &[DVec3; 3], b: &[DVec3; 3], d: DVec3) -> f64 {
+    let n = (a[1] - a[0]).cross(a[2] - a[0]);
+    let nd = n.dot(d);
+    if nd.abs() <= 1e-12 * n.length() {
+        return f64::INFINITY;
+    }
+    // Signed distances, oriented so that moving along d decreases them.
+    let sign = if nd > 0.0 { -1.0 } else { 1.0 };
+    let dist = b.map(|p| sign * n.dot(p - a[0]));
+    // b meets the plane while min(dist) - s |nd| <= 0 <= max(dist) - s |nd|.
+    dist[0].max(dist[1]).max(dist[2]) / nd.abs()
+}
+
+/// All touches of one triangle pair with `s` in `[lo, hi]`, pushed to `ws.events`; returns the
+/// largest (or `-inf`).
+#[allow(clippy::too_many_arguments)]
+fn pair_events(
+    ws: &mut Workspace,
+    fixed: &TouchMesh,
+    moving: &TouchMesh,
+    fr: &Frame,
+    tf: u32,
+    tm: u32,
+    lo: f64,
+    hi: f64,
+) -> f64 {
+    let fi = fixed.indices()[tf as usize];
+    let mi = moving.indices()[tm as usize];
+    let pf = fixed_tri(fixed, tf);
+    let pm = mi.map(|v| moving_pt(ws, moving, fr, v));
+    let mut best = f64::NEG_INFINITY;
+    let mut push = |ws: &mut Workspace, e: Event| {
+        best = best.max(e.s);
+        ws.events.push(e);
+    };
+    for k in 0..3 {
+        if let Some((s, bary)) = ray_triangle(pm[k], -fr.u, &pf, lo, hi) {
+            let e = Event {
+                s,
+                point: pm[k] - s * fr.u,
+                normal: tri_normal(&pf),
+                fixed: tri_feature(fixed, tf, bary),
+                moving: Feature::Vertex(mi[k]),
+            };
+            push(ws, e);
+        }
+        if let Some((s, bary)) = ray_triangle(pf[k], fr.u, &pm, lo, hi) {
+            let e = Event {
+                s,
+                point: pf[k],
+                normal: tri_normal(&pm),
+                fixed: Feature::Vertex(fi[k]),
+                moving: tri_feature(moving, tm, bary),
+            };
+            push(ws, e);
+        }
+    }
+    for i in 0..3 {
+        let (p0, p1) = (pm[i], pm[(i + 1) % 3]);
+        for j in 0..3 {
+            let (q0, q1) = (pf[j], pf[(j + 1) % 3]);
+            if let Some((s, alpha, beta, n)) = edge_edge(p0, p1, q0, q1, fr.u, lo, hi) {
+                let e = Event {
+                    s,
+                    point: q0 + beta * (q1 - q0),
+                    normal: n,
+                    fixed: edge_feature([fi[j], fi[(j + 1) % 3]], beta),
+                    moving: edge_feature([mi[i], mi[(i + 1) % 3]], alpha),
+                };
+                push(ws, e);
+            }
+        }
+    }
+    best
+}
+
+/// The interval of `s` over which box `m` walked back by `s` along `-u` overlaps box `f`
+/// (both loosened by `margin`).
+fn ray_overlap_interval(m: &Aabb, f: &Aabb, u: Vector, margin: Real) -> Option<(Real, Real)> {
+    let (mut lo, mut hi) = (Real::NEG_INFINITY, Real::INFINITY);
+    for k in 0..3 {
+        let (fmn, fmx) = (f.mins[k] - margin, f.maxs[k] + margin);
+        let (mmn, mmx) = (m.mins[k] - margin, m.maxs[k] + margin);
+        let uk = u[k];
+        // Need mmn - s uk <= fmx and mmx - s uk >= fmn.
+        if uk.abs() < 1e-12 {
+            if mmn > fmx || mmx < fmn {
+                return None;
+            }
+            continue;
+        }
+        let a = (mmn - fmx) / uk;
+        let b = (mmx - fmn) / uk;
+        let (l, h) = if uk > 0.0 { (a, b) } else { (b, a) };
+        lo = lo.max(l);
+        hi = hi.min(h);
+        if lo > hi {
+            return None;
+        }
+    }
+    Some((lo, hi))
 }
 
 /// The interval of `s` over which the moving mesh's box (walked back by `s`) overlaps the fixed
