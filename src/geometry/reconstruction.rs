@@ -41,7 +41,7 @@ use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{BvhNode, TraversalAction};
-use parry3d::query::{Ray, RayCast};
+use parry3d::query::{PointQuery, Ray, RayCast};
 use std::cell::Cell;
 
 /// Why a reconstruction could not run.
@@ -291,8 +291,13 @@ impl Reconstructor {
         let s_star;
         if pen0 {
             result.state = TouchState::Penetrating;
+            // No surface meets the other between the first touch and the start of the step
+            // (the first touch is the largest), so the configuration just before the first
+            // touch is the start pose's: valid if the step started apart. The start pose is
+            // the cheaper one to test (farther from contact), and needs no test at all when the
+            // boxes were already apart there.
             let valid = first_touch > tol
-                && !self.penetrating_at(fixed, moving, &fr, first_touch + 2.0 * tol);
+                && (s_hi < traj_len || !self.penetrating_at(fixed, moving, &fr, traj_len));
             if valid && source == DirectionSource::Trajectory {
                 s_star = first_touch;
             } else {
@@ -380,9 +385,9 @@ impl Reconstructor {
         let seed = seed_first_touch(fixed, moving, fr, s_min, s_max)
             .map_or(f64::NEG_INFINITY, |s| s - 10.0 * tol);
         let best = Cell::new(seed);
+        let boxer = BoxTransform::new(&pos12, u, margin);
         let reach = |nf: &BvhNode, nm: &BvhNode| -> Option<f64> {
-            let m = nm.aabb().transform_by(&pos12);
-            let (lo, hi) = ray_overlap_interval(&m, &nf.aabb(), u, margin)?;
+            let (lo, hi) = boxer.overlap_interval(nm, nf)?;
             let (lo, hi) = ((lo as f64).max(s_min), (hi as f64).min(s_max));
             (lo <= hi + tol).then_some(hi)
         };
@@ -586,6 +591,18 @@ impl Reconstructor {
         s: f64,
     ) -> bool {
         let shift = -s * fr.u;
+        // Quick sufficient test first: the vertex of each object deepest along the motion lies
+        // inside the other (closed) one, farther than the tolerance from its surface.
+        if fixed.is_closed() && moving.is_closed() {
+            let inv = fr.rot.conjugate();
+            let v = support_vertex(moving, (inv * fr.u).as_vec3());
+            let p = fr.moving_point(moving.vertices()[v as usize]) + shift;
+            let w = support_vertex(fixed, (-fr.u).as_vec3());
+            let q = inv * (fixed.vertices()[w as usize].as_dvec3() - shift - fr.tra);
+            if deep_inside(fixed, p, fr.tol) || deep_inside(moving, q, fr.tol) {
+                return true;
+            }
+        }
         let pos12 = Pose::from_parts((fr.tra + shift).as_vec3(), fr.rot.as_quat());
         let margin = (fr.tol as Real) * 4.0 + 1e-6 * fixed.scale().max(moving.scale());
         let overlap = |nf: &BvhNode, nm: &BvhNode| {
@@ -782,31 +799,60 @@ fn pair_events(
     best
 }
 
-/// The interval of `s` over which box `m` walked back by `s` along `-u` overlaps box `f`
-/// (both loosened by `margin`).
-fn ray_overlap_interval(m: &Aabb, f: &Aabb, u: Vector, margin: Real) -> Option<(Real, Real)> {
-    let (mut lo, mut hi) = (Real::NEG_INFINITY, Real::INFINITY);
-    for k in 0..3 {
-        let (fmn, fmx) = (f.mins[k] - margin, f.maxs[k] + margin);
-        let (mmn, mmx) = (m.mins[k] - margin, m.maxs[k] + margin);
-        let uk = u[k];
-        // Need mmn - s uk <= fmx and mmx - s uk >= fmn.
-        if uk.abs() < 1e-12 {
-            if mmn > fmx || mmx < fmn {
-                return None;
-            }
-            continue;
-        }
-        let a = (mmn - fmx) / uk;
-        let b = (mmx - fmn) / uk;
-        let (l, h) = if uk > 0.0 { (a, b) } else { (b, a) };
-        lo = lo.max(l);
-        hi = hi.min(h);
-        if lo > hi {
-            return None;
+/// Moves boxes of the moving tree into the fixed frame and intersects them with boxes of the
+/// fixed tree along the ray, with the rotation matrices and `1/u` computed once per query.
+struct BoxTransform {
+    rot: glamx::Mat3,
+    abs_rot: glamx::Mat3,
+    tra: Vector,
+    inv_u: Vector,
+    u: Vector,
+    margin: Real,
+}
+
+impl BoxTransform {
+    fn new(pos12: &Pose, u: Vector, margin: Real) -> Self {
+        let rot = glamx::Mat3::from_quat(pos12.rotation);
+        let abs_rot = glamx::Mat3::from_cols(rot.x_axis.abs(), rot.y_axis.abs(), rot.z_axis.abs());
+        Self {
+            rot,
+            abs_rot,
+            tra: pos12.translation,
+            inv_u: u.recip(),
+            u,
+            margin,
         }
     }
-    Some((lo, hi))
+
+    /// The interval of `s` over which moving box `nm`, walked back by `s` along `-u`, overlaps
+    /// fixed box `nf` (both loosened by the margin).
+    #[inline]
+    fn overlap_interval(&self, nm: &BvhNode, nf: &BvhNode) -> Option<(Real, Real)> {
+        let (mmin, mmax) = (nm.mins(), nm.maxs());
+        let c = self.rot * ((mmin + mmax) * 0.5) + self.tra;
+        let h = self.abs_rot * ((mmax - mmin) * 0.5) + Vector::splat(2.0 * self.margin);
+        let (fmin, fmax) = (nf.mins(), nf.maxs());
+        // Need (c - h) - s u <= fmax and (c + h) - s u >= fmin, per axis.
+        let a = (c - h - fmax) * self.inv_u;
+        let b = (c + h - fmin) * self.inv_u;
+        let (mut lo, mut hi) = (Real::NEG_INFINITY, Real::INFINITY);
+        for k in 0..3 {
+            if self.u[k].abs() < 1e-12 {
+                if c[k] - h[k] > fmax[k] || c[k] + h[k] < fmin[k] {
+                    return None;
+                }
+                continue;
+            }
+            let (l, r) = if self.u[k] > 0.0 {
+                (a[k], b[k])
+            } else {
+                (b[k], a[k])
+            };
+            lo = lo.max(l);
+            hi = hi.min(r);
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
 }
 
 /// The interval of `s` over which the moving mesh's box (walked back by `s`) overlaps the fixed
@@ -1017,6 +1063,18 @@ fn sample_inside(
         }
     }
     None
+}
+
+/// Is `p` (mesh frame) inside the closed mesh and farther than `tol` from its surface?
+fn deep_inside(mesh: &TouchMesh, p: DVec3, tol: f64) -> bool {
+    point_in_closed_mesh(mesh, p) == Some(true)
+        && mesh
+            .trimesh()
+            .project_local_point(p.as_vec3(), false)
+            .point
+            .as_dvec3()
+            .distance(p)
+            > tol
 }
 
 /// Parity test for a point in the local frame of a closed mesh. `None` if the ray grazes an
