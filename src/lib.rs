@@ -31,6 +31,8 @@
 //! ## Layers
 //! Lower layers never name a rapier handle or set:
 //! - [`geometry`]: pure geometry, the paper's eq. (1)-(3) (no pipeline).
+//! - [`hooks`]: the rapier integration: [`hooks::TouchPipeline`] steps a `PhysicsWorld` with
+//!   [`hooks::TouchHooks`], a step guard against tunneling, tool proxies and contact reports.
 //!
 //! ## Caveats
 //! - A body that also rotated over the step is walked back along `-D` at its *current*
@@ -46,6 +48,7 @@ pub use parry3d;
 pub use rapier3d;
 
 pub mod geometry;
+pub mod hooks;
 pub mod math;
 pub mod scenes;
 
@@ -55,6 +58,9 @@ pub mod prelude {
         safe_step_length, ContactConfiguration, ContactKind, ContactPatch, ContactPoint,
         DirectionSource, Feature, ReconstructionError, ReconstructionOptions, Reconstructor,
         TouchMesh, TouchMeshError, TouchState,
+    };
+    pub use crate::hooks::{
+        HookCounters, PairReport, ToolFeedback, TouchHooks, TouchOptions, TouchPipeline,
     };
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use parry3d::shape::{ConvexPolyhedron, Cuboid, TriMesh};

@@ -7,6 +7,7 @@ use super::reconstruction::Frame;
 use super::touch_mesh::{Feature, TouchMesh};
 use crate::math::Vector;
 use glamx::{DQuat, DVec3};
+use parry3d::query::PointQuery;
 
 /// A touching feature pair found along the trajectory.
 #[derive(Clone, Debug)]
@@ -39,6 +40,31 @@ fn features_adjacent(mesh: &TouchMesh, a: Feature, b: Feature) -> bool {
         .any(|&x| vb[..nb].iter().any(|&y| mesh.vertices_adjacent(x, y)))
 }
 
+/// Is the midpoint of two touch points on both surfaces (within ten tolerances)? Two touches
+/// joined by mesh edges can still be separate regions on a coarse mesh (the two legs of a U
+/// standing on one floor polygon): the contact set between them is empty.
+fn midpoint_on_both(
+    fixed: &TouchMesh,
+    moving: &TouchMesh,
+    fr: &Frame,
+    s_star: f64,
+    a: DVec3,
+    b: DVec3,
+) -> bool {
+    let m = 0.5 * (a + b);
+    let lim = 10.0 * fr.tol;
+    if a.distance_squared(b) <= (4.0 * lim) * (4.0 * lim) {
+        return true;
+    }
+    let on = |mesh: &TouchMesh, p: DVec3| {
+        let q = mesh.trimesh().project_local_point(p.as_vec3(), false).point;
+        q.as_dvec3().distance(p) <= lim
+    };
+    // The moving surface at first touch: walked back by s_star, in its own frame.
+    let m_local = fr.rot.conjugate() * (m + s_star * fr.u - fr.tra);
+    on(fixed, m) && on(moving, m_local)
+}
+
 fn find(parent: &mut [usize], mut i: usize) -> usize {
     while parent[i] != i {
         parent[i] = parent[parent[i]];
@@ -60,6 +86,7 @@ pub(crate) fn build_patches(
     moving: &TouchMesh,
     fr: &Frame,
     mut events: Vec<Event>,
+    s_star: f64,
     to_world: &dyn Fn(DVec3) -> Vector,
     rf: DQuat,
 ) -> Vec<ContactPatch> {
@@ -92,6 +119,7 @@ pub(crate) fn build_patches(
         for j in i + 1..n {
             if features_adjacent(fixed, kept[i].fixed, kept[j].fixed)
                 && features_adjacent(moving, kept[i].moving, kept[j].moving)
+                && midpoint_on_both(fixed, moving, fr, s_star, kept[i].point, kept[j].point)
             {
                 let (a, b) = (find(&mut parent, i), find(&mut parent, j));
                 if a != b {

@@ -357,7 +357,7 @@ impl Reconstructor {
             .filter(|e| (e.s - s_star).abs() <= tol)
             .cloned()
             .collect();
-        result.patches = build_patches(fixed, moving, &fr, selected, &to_world, rf);
+        result.patches = build_patches(fixed, moving, &fr, selected, s_star, &to_world, rf);
         Ok(result)
     }
 

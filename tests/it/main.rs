@@ -2,5 +2,6 @@
 
 mod common;
 mod fig4;
+mod pipeline;
 mod reconstruction_bad_input;
 mod reconstruction_properties;

@@ -1,0 +1,25 @@
+//! The rapier integration: hooks, the step guard, tools and reports.
+//!
+//! Lower layers ([`crate::geometry`]) know nothing of rapier's sets and handles; this one wires
+//! them into a rapier 0.36 pipeline.
+//!
+//! # Activating
+//! Give colliders `ActiveHooks::MODIFY_SOLVER_CONTACTS` and step the world through
+//! [`TouchPipeline::step`] (or hand [`TouchPipeline::hooks`] to your own `step` calls and
+//! call the guard yourself, see the pipeline's docs).
+//!
+//! # Caveats
+//! - rapier runs hooks at the start of `step`, on the previous step's poses, with read-only
+//!   sets: hooks can move at most rapier's ≤ 4 solver contacts per manifold and cannot move
+//!   bodies, so exact positions come from the step guard, between steps.
+//! - Set `IntegrationParameters::contact_clustering = false` ([`TouchPipeline::configure`]).
+//! - Sleeping bodies are not guarded (they do not move); a collider whose shape has no
+//!   triangle-mesh form (height fields, compounds, voxels) is left to rapier.
+
+mod report;
+mod touch_hooks;
+mod touch_pipeline;
+
+pub use report::{PairReport, ToolFeedback};
+pub use touch_hooks::{HookCounters, TouchHooks};
+pub use touch_pipeline::{TouchOptions, TouchPipeline};

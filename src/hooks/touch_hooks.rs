@@ -1,0 +1,245 @@
+//! [`TouchHooks`]: rapier `PhysicsHooks` that replace the solver's view of a penetrating pair by
+//! the reconstructed first-touch configuration.
+
+use crate::geometry::{ContactConfiguration, ReconstructionOptions, Reconstructor, TouchMesh};
+use crate::math::{Pose, Vector};
+use rapier3d::dynamics::{RigidBodyHandle, RigidBodySet};
+use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
+use rapier3d::pipeline::{ContactModificationContext, PairFilterContext, PhysicsHooks};
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// This step's reconstructions, by (collider 1, collider 2).
+type PairCache = HashMap<(ColliderHandle, ColliderHandle), Option<Arc<ContactConfiguration>>>;
+
+/// A collider's cached [`TouchMesh`], with the address of the shape it was built from (a new
+/// shape gets a new mesh).
+#[derive(Clone)]
+pub(crate) struct CachedMesh {
+    pub shape_ptr: usize,
+    pub mesh: Arc<TouchMesh>,
+}
+
+/// Counters of what the hooks did during the last step (they never panic; what they skip is
+/// counted here).
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct HookCounters {
+    /// Manifolds whose solver contacts were moved onto the reconstructed first touch.
+    pub rewritten: usize,
+    /// Manifolds whose penetrating solver contacts were removed because the reconstruction
+    /// found the pair apart.
+    pub dropped: usize,
+    /// Manifolds left to rapier: a collider without a touch mesh, a shape that has no
+    /// triangle-mesh form, or a failed reconstruction.
+    pub skipped: usize,
+}
+
+/// rapier [`PhysicsHooks`] that rewrite the manifolds of penetrating pairs with the
+/// reconstructed first-touch configuration, and forward everything to the user's hooks `H`.
+///
+/// # When it runs
+/// rapier calls `modify_solver_contacts` at the start of `step`, on the poses the previous step
+/// left (after [`super::TouchPipeline`]'s corrections), for colliders with
+/// `ActiveHooks::MODIFY_SOLVER_CONTACTS`. For such a manifold of a pair whose two colliders have
+/// touch meshes, it reconstructs the pair along its relative motion over the previous step
+/// (from the pose history the pipeline records), then:
+/// - **penetrating deeper than the slop or perforated, first touch on the last step's path:**
+///   sets the manifold normal to the first-touch patch normal and, for each solver contact,
+///   puts `anchor1` on the first-touch contact plane, `anchor2` the reversing vector behind it
+///   and `dist = -(reversing vector · normal)`: the solver pushes out exactly what the
+///   reconstruction found, along the right normal;
+/// - **touching, or penetrating since before the last step** (a resting contact rapier is
+///   already pushing apart): leaves the contacts as rapier made them;
+/// - **separated:** removes solver contacts with `dist < 0` (rapier's estimate was wrong), keeps
+///   speculative ones.
+///
+/// Then the user's hooks run on the result. Filtering hooks are forwarded unchanged.
+///
+/// # Caveats (rapier 0.36)
+/// - A hook cannot add solver contacts: at most the (≤ 4) contacts rapier selected are moved.
+/// - Softness is global: rapier removes a written `dist` over several substeps unless the
+///   contact softness is stiff. [`super::TouchPipeline`] therefore also corrects poses between
+///   steps; the hooks give the solver the right normal and points.
+/// - Set `IntegrationParameters::contact_clustering = false`, or mesh manifolds arrive merged.
+pub struct TouchHooks<H: PhysicsHooks = ()> {
+    /// The user's hooks, called after this crate's.
+    pub inner: H,
+    pub(crate) meshes: HashMap<ColliderHandle, CachedMesh>,
+    pub(crate) prev_poses: HashMap<RigidBodyHandle, Pose>,
+    pub(crate) options: ReconstructionOptions,
+    pub(crate) slop: crate::math::Real,
+    cache: Mutex<PairCache>,
+    pool: Mutex<Vec<Reconstructor>>,
+    rewritten: AtomicUsize,
+    dropped: AtomicUsize,
+    skipped: AtomicUsize,
+}
+
+impl Default for TouchHooks<()> {
+    fn default() -> Self {
+        Self::new(())
+    }
+}
+
+impl<H: PhysicsHooks> TouchHooks<H> {
+    /// Hooks that forward to `inner` after their own work.
+    pub fn new(inner: H) -> Self {
+        Self {
+            inner,
+            meshes: HashMap::new(),
+            prev_poses: HashMap::new(),
+            options: ReconstructionOptions::default(),
+            slop: 0.0,
+            cache: Mutex::new(HashMap::new()),
+            pool: Mutex::new(Vec::new()),
+            rewritten: AtomicUsize::new(0),
+            dropped: AtomicUsize::new(0),
+            skipped: AtomicUsize::new(0),
+        }
+    }
+
+    /// What the hooks did during the last step.
+    pub fn counters(&self) -> HookCounters {
+        HookCounters {
+            rewritten: self.rewritten.load(Ordering::Relaxed),
+            dropped: self.dropped.load(Ordering::Relaxed),
+            skipped: self.skipped.load(Ordering::Relaxed),
+        }
+    }
+
+    /// Clears the per-step cache and counters (called by the pipeline before each step).
+    pub(crate) fn begin_step(&mut self) {
+        self.cache.get_mut().map(|c| c.clear()).unwrap_or(());
+        *self.rewritten.get_mut() = 0;
+        *self.dropped.get_mut() = 0;
+        *self.skipped.get_mut() = 0;
+    }
+
+    fn reconstruct_pair(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> Option<Arc<ContactConfiguration>> {
+        if let Ok(cache) = self.cache.lock() {
+            if let Some(hit) = cache.get(&(c1, c2)) {
+                return hit.clone();
+            }
+        }
+        let mut rec = self
+            .pool
+            .lock()
+            .ok()
+            .and_then(|mut p| p.pop())
+            .unwrap_or_else(|| Reconstructor::new(self.options));
+        let result = pair_configuration(
+            &mut rec,
+            &self.meshes,
+            &self.prev_poses,
+            bodies,
+            colliders,
+            c1,
+            colliders.get(c1).map(|c| *c.position()),
+            c2,
+            colliders.get(c2).map(|c| *c.position()),
+        )
+        .map(Arc::new);
+        if let Ok(mut p) = self.pool.lock() {
+            p.push(rec);
+        }
+        if let Ok(mut cache) = self.cache.lock() {
+            cache.insert((c1, c2), result.clone());
+        }
+        result
+    }
+}
+
+/// The motion of a body over the last step (zero without history).
+pub(crate) fn body_motion(
+    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    bodies: &RigidBodySet,
+    body: Option<RigidBodyHandle>,
+) -> Vector {
+    body.and_then(|h| Some(bodies.get(h)?.translation() - prev_poses.get(&h)?.translation))
+        .filter(|d| d.is_finite())
+        .unwrap_or(Vector::ZERO)
+}
+
+/// Reconstructs collider 2 against collider 1 (at the given world poses) along their relative
+/// motion over the last step. `None` when a mesh is missing or a pose is not finite.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn pair_configuration(
+    rec: &mut Reconstructor,
+    meshes: &HashMap<ColliderHandle, CachedMesh>,
+    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    c1: ColliderHandle,
+    pos1: Option<Pose>,
+    c2: ColliderHandle,
+    pos2: Option<Pose>,
+) -> Option<ContactConfiguration> {
+    let (m1, m2) = (meshes.get(&c1)?, meshes.get(&c2)?);
+    let (co1, co2) = (colliders.get(c1)?, colliders.get(c2)?);
+    let (pos1, pos2) = (pos1?, pos2?);
+    let d1 = body_motion(prev_poses, bodies, co1.parent());
+    let d2 = body_motion(prev_poses, bodies, co2.parent());
+    let prev2 = Pose::from_parts(pos2.translation - (d2 - d1), pos2.rotation);
+    rec.reconstruct(&m1.mesh, &pos1, &m2.mesh, &pos2, &prev2)
+        .ok()
+}
+
+impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
+    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
+        self.inner.filter_contact_pair(context)
+    }
+
+    fn filter_intersection_pair(&self, context: &PairFilterContext) -> bool {
+        self.inner.filter_intersection_pair(context)
+    }
+
+    fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
+        let (c1, c2) = (context.collider1, context.collider2);
+        let config = if self.meshes.contains_key(&c1) && self.meshes.contains_key(&c2) {
+            self.reconstruct_pair(context.bodies, context.colliders, c1, c2)
+        } else {
+            None
+        };
+        match (config, context.rigid_mut()) {
+            (Some(config), Some(m)) => {
+                if config.needs_correction() && config.on_trajectory && config.depth > self.slop {
+                    let Some(patch) = config.patches.first() else {
+                        self.skipped.fetch_add(1, Ordering::Relaxed);
+                        return self.inner.modify_solver_contacts(context);
+                    };
+                    let n = patch.normal;
+                    let center = patch.center();
+                    let r = config.reversing_vector;
+                    *m.normal = n;
+                    for sc in m.solver_contacts.iter_mut() {
+                        // Keep the contact where rapier put it (its lever arms are frozen at the
+                        // manifold point), on the first-touch contact plane; the moving surface's
+                        // matching point is the reversing vector behind it.
+                        let p = sc.anchor1 - n * (sc.anchor1 - center).dot(n);
+                        sc.anchor1 = p;
+                        sc.anchor2 = p - r;
+                        sc.dist = -r.dot(n);
+                    }
+                    self.rewritten.fetch_add(1, Ordering::Relaxed);
+                } else if config.state == crate::geometry::TouchState::Separated {
+                    let before = m.solver_contacts.len();
+                    m.solver_contacts.retain(|c| c.dist >= 0.0);
+                    if m.solver_contacts.len() != before {
+                        self.dropped.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+            }
+            _ => {
+                self.skipped.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+        self.inner.modify_solver_contacts(context);
+    }
+}

@@ -1,0 +1,279 @@
+//! The touch pipeline in a real rapier pipeline (dt = 1/60, rapier's CCD off): boxes dropped
+//! at up to 100 m/s onto a fixed cuboid and onto a zero-thickness TriMesh floor never tunnel and
+//! never penetrate more than 1 mm after any step; a U-shaped TriMesh body rests on both legs
+//! over a bump; a resting stack stays still; removals, sleeping bodies and bodies without
+//! colliders do not break the hooks.
+
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+
+const HOOKS: ActiveHooks = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+
+fn world() -> PhysicsWorld {
+    let mut w = PhysicsWorld::default();
+    w.integration_parameters.dt = 1.0 / 60.0;
+    w.integration_parameters.max_ccd_substeps = 0; // rapier's CCD off
+    TouchPipeline::configure(&mut w.integration_parameters);
+    w
+}
+
+#[derive(Copy, Clone, Debug)]
+enum Floor {
+    Cuboid,
+    ThinTriMesh,
+}
+
+fn add_floor(w: &mut PhysicsWorld, floor: Floor) {
+    let c = match floor {
+        // Top face at y = 0.
+        Floor::Cuboid => {
+            ColliderBuilder::cuboid(5.0, 0.5, 5.0).translation(Vector::new(0.0, -0.5, 0.0))
+        }
+        Floor::ThinTriMesh => ColliderBuilder::trimesh(
+            vec![
+                Vector::new(-5.0, 0.0, -5.0),
+                Vector::new(5.0, 0.0, -5.0),
+                Vector::new(5.0, 0.0, 5.0),
+                Vector::new(-5.0, 0.0, 5.0),
+            ],
+            vec![[0, 2, 1], [0, 3, 2]],
+        )
+        .unwrap(),
+    };
+    w.insert_collider(c.active_hooks(HOOKS), None);
+}
+
+/// Lowest point of a box of half extent `h` at `pose`.
+fn lowest(pose: &Pose, h: f32) -> f32 {
+    let mut m = f32::MAX;
+    for sx in [-h, h] {
+        for sy in [-h, h] {
+            for sz in [-h, h] {
+                m = m.min(pose.transform_point(Vector::new(sx, sy, sz)).y);
+            }
+        }
+    }
+    m
+}
+
+struct DropResult {
+    tunneled: bool,
+    max_penetration: f32,
+}
+
+fn drop_box(speed: f32, floor: Floor, with_crate: bool, steps: usize) -> DropResult {
+    let mut w = world();
+    add_floor(&mut w, floor);
+    let h = 0.25;
+    let b = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 3.0, 0.0))
+            .linvel(Vector::new(0.0, -speed, 0.0)),
+    );
+    w.insert_collider(
+        ColliderBuilder::cuboid(h, h, h).active_hooks(HOOKS),
+        Some(b),
+    );
+    let mut touch = TouchPipeline::default();
+    let mut r = DropResult {
+        tunneled: false,
+        max_penetration: 0.0,
+    };
+    for _ in 0..steps {
+        if with_crate {
+            touch.step(&mut w);
+        } else {
+            w.step();
+        }
+        let pose = *w.bodies[b].position();
+        if pose.translation.y < 0.0 {
+            r.tunneled = true;
+        } else {
+            r.max_penetration = r.max_penetration.max(-lowest(&pose, h));
+        }
+    }
+    r
+}
+
+#[test]
+fn fast_boxes_never_tunnel_and_penetrate_at_most_1mm() {
+    for floor in [Floor::Cuboid, Floor::ThinTriMesh] {
+        for speed in [1.0, 5.0, 20.0, 50.0, 100.0] {
+            let r = drop_box(speed, floor, true, 120);
+            assert!(!r.tunneled, "{floor:?} at {speed} m/s tunneled");
+            assert!(
+                r.max_penetration <= 1e-3,
+                "{floor:?} at {speed} m/s: penetration {} m",
+                r.max_penetration
+            );
+        }
+    }
+}
+
+/// The scenario is a real stress: without the crate, rapier (CCD off) lets the box through the
+/// thin floor at 100 m/s.
+#[test]
+fn vanilla_rapier_without_ccd_tunnels_through_the_thin_floor() {
+    assert!(drop_box(100.0, Floor::ThinTriMesh, false, 30).tunneled);
+}
+
+#[test]
+fn resting_stack_of_three_boxes_stays_still() {
+    let mut w = world();
+    add_floor(&mut w, Floor::Cuboid);
+    let h = 0.25;
+    let boxes: Vec<RigidBodyHandle> = (0..3)
+        .map(|i| {
+            let b = w.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
+                0.0,
+                h + 2.0 * h * i as f32,
+                0.0,
+            )));
+            w.insert_collider(
+                ColliderBuilder::cuboid(h, h, h).active_hooks(HOOKS),
+                Some(b),
+            );
+            b
+        })
+        .collect();
+    let mut touch = TouchPipeline::default();
+    // Let rapier's contacts settle for a second, then watch for ten.
+    for _ in 0..60 {
+        touch.step(&mut w);
+    }
+    let start: Vec<Vector> = boxes.iter().map(|b| w.bodies[*b].translation()).collect();
+    let mut worst = 0.0f32;
+    for _ in 0..600 {
+        touch.step(&mut w);
+        for (b, s) in boxes.iter().zip(&start) {
+            worst = worst.max((w.bodies[*b].translation() - *s).length());
+        }
+    }
+    assert!(worst <= 1e-4, "stack moved {worst} m");
+}
+
+/// A U-shaped (non-convex) TriMesh body dropped over a bump comes to rest touching the floor
+/// on both legs, the bump between them.
+#[test]
+fn u_shaped_trimesh_rests_on_both_legs_over_a_bump() {
+    use rapier_touch::geometry::generators::extruded_polygon;
+    let mut w = world();
+    // Floor: a slab with a bump (extruded profile), top at y = 0, bump up to y = 0.3.
+    let (fv, fi) = extruded_polygon(
+        &[
+            [-3.0, -0.5],
+            [3.0, -0.5],
+            [3.0, 0.0],
+            [0.3, 0.0],
+            [0.3, 0.3],
+            [-0.3, 0.3],
+            [-0.3, 0.0],
+            [-3.0, 0.0],
+        ],
+        4.0,
+    )
+    .unwrap();
+    w.insert_collider(
+        ColliderBuilder::trimesh(fv, fi)
+            .unwrap()
+            .active_hooks(HOOKS),
+        None,
+    );
+    // The U: legs at x in [-1.2, -0.8] and [0.8, 1.2], 0.6 tall, joined on top.
+    let (uv, ui) = extruded_polygon(
+        &[
+            [-1.2, 0.0],
+            [-0.8, 0.0],
+            [-0.8, 0.6],
+            [0.8, 0.6],
+            [0.8, 0.0],
+            [1.2, 0.0],
+            [1.2, 0.9],
+            [-1.2, 0.9],
+        ],
+        1.0,
+    )
+    .unwrap();
+    let b = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 1.0, 0.0))
+            .linvel(Vector::new(0.0, -8.0, 0.0)),
+    );
+    let leg_ids = w.insert_collider(
+        ColliderBuilder::trimesh(uv, ui)
+            .unwrap()
+            .active_hooks(HOOKS)
+            .density(1.0),
+        Some(b),
+    );
+    let mut touch = TouchPipeline::default();
+    let (mut left, mut right) = (false, false);
+    for _ in 0..240 {
+        touch.step(&mut w);
+        for r in touch.reports().iter().filter(|r| r.moving == leg_ids) {
+            for p in &r.patches {
+                left |= p.center().x < -0.5;
+                right |= p.center().x > 0.5;
+            }
+        }
+    }
+    let pose = *w.bodies[b].position();
+    // Both leg bottoms at the floor (y = 0) within 1 mm.
+    for x in [-1.0, 1.0] {
+        let foot = pose.transform_point(Vector::new(x, 0.0, 0.0));
+        assert!(foot.y.abs() <= 1e-3, "leg at x = {x} is at y = {}", foot.y);
+    }
+    assert!(w.bodies[b].linvel().length() < 0.05, "still moving");
+    // The reports saw contact patches under both legs.
+    assert!(
+        left && right,
+        "patches under the left leg: {left}, right leg: {right}"
+    );
+}
+
+#[test]
+fn removals_sleep_and_colliderless_bodies_do_not_break_the_hooks() {
+    let mut w = world();
+    add_floor(&mut w, Floor::Cuboid);
+    let mut bodies = Vec::new();
+    for i in 0..4 {
+        let b = w.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
+            i as f32 - 1.5,
+            0.5 + i as f32,
+            0.0,
+        )));
+        w.insert_collider(
+            ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(HOOKS),
+            Some(b),
+        );
+        bodies.push(b);
+    }
+    // A body with no collider, and one that falls asleep on the floor.
+    let bare = w.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(3.0, 2.0, 0.0)));
+    let mut touch = TouchPipeline::default();
+    for step in 0..400 {
+        if step == 30 {
+            w.remove_body(bodies[1]);
+        }
+        if step == 60 {
+            let c = w.bodies[bodies[2]].colliders()[0];
+            w.remove_collider(c);
+        }
+        touch.step(&mut w);
+    }
+    // The untouched boxes rest on the floor; the one without a collider fell through freely.
+    for b in [bodies[0], bodies[3]] {
+        let y = w.bodies[b].translation().y;
+        assert!((y - 0.25).abs() < 1e-3, "box at {y}");
+        assert!(w.bodies[b].is_sleeping());
+    }
+    // rapier leaves a body without mass alone; the hooks must not have touched it either.
+    assert!(w.bodies[bare].position().is_finite());
+    // The box that lost its collider is no longer guarded (and has no mass left for rapier to
+    // move): no report names it.
+    assert!(w.bodies[bodies[2]].position().is_finite());
+    assert!(touch
+        .reports()
+        .iter()
+        .all(|r| w.colliders.get(r.moving).is_some()));
+}
