@@ -355,3 +355,73 @@ pub fn colliding_features(
     let (em, vm) = count(moving, &hit_m);
     (ef + em, vf + vm)
 }
+
+/// The floors of [`drop_world`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum DropFloor {
+    /// A fixed 10 m × 1 m × 10 m cuboid, top face at `y = 0`.
+    Cuboid,
+    /// A fixed two-triangle TriMesh of zero thickness at `y = 0`, 10 m square.
+    ThinTriMesh,
+}
+
+/// Half extent of the box [`drop_world`] drops.
+pub const DROP_BOX_HALF: Real = 0.25;
+
+/// A rapier world (dt = 1/60, rapier's CCD off, contact clustering off) with `floor` and a
+/// 0.5 m dynamic box 3 m above it falling at `speed` m/s. Every collider opts into the touch
+/// hooks. Returns the world and the box.
+pub fn drop_world(
+    speed: Real,
+    floor: DropFloor,
+) -> (
+    rapier3d::pipeline::PhysicsWorld,
+    rapier3d::dynamics::RigidBodyHandle,
+) {
+    use rapier3d::prelude::*;
+    let hooks = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    let mut w = PhysicsWorld::default();
+    w.integration_parameters.dt = 1.0 / 60.0;
+    w.integration_parameters.max_ccd_substeps = 0;
+    w.integration_parameters.contact_clustering = false;
+    let floor = match floor {
+        DropFloor::Cuboid => {
+            ColliderBuilder::cuboid(5.0, 0.5, 5.0).translation(Vector::new(0.0, -0.5, 0.0))
+        }
+        DropFloor::ThinTriMesh => ColliderBuilder::trimesh(
+            vec![
+                Vector::new(-5.0, 0.0, -5.0),
+                Vector::new(5.0, 0.0, -5.0),
+                Vector::new(5.0, 0.0, 5.0),
+                Vector::new(-5.0, 0.0, 5.0),
+            ],
+            vec![[0, 2, 1], [0, 3, 2]],
+        )
+        .expect("a valid quad"),
+    };
+    w.insert_collider(floor.active_hooks(hooks), None);
+    let b = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 3.0, 0.0))
+            .linvel(Vector::new(0.0, -speed, 0.0)),
+    );
+    let h = DROP_BOX_HALF;
+    w.insert_collider(
+        ColliderBuilder::cuboid(h, h, h).active_hooks(hooks),
+        Some(b),
+    );
+    (w, b)
+}
+
+/// How deep a box of half extent `half` at `pose` reaches below `y = 0` (0 when above).
+pub fn box_depth_below_floor(pose: &Pose, half: Real) -> Real {
+    let mut lowest = Real::MAX;
+    for sx in [-half, half] {
+        for sy in [-half, half] {
+            for sz in [-half, half] {
+                lowest = lowest.min(pose.transform_point(Vector::new(sx, sy, sz)).y);
+            }
+        }
+    }
+    (-lowest).max(0.0)
+}

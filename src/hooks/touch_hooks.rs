@@ -30,7 +30,7 @@ pub struct HookCounters {
     /// Manifolds whose penetrating solver contacts were removed because the reconstruction
     /// found the pair apart.
     pub dropped: usize,
-    /// Manifolds left to rapier: a collider without a touch mesh, a shape that has no
+    /// Deep manifolds left to rapier: a collider without a touch mesh, a shape that has no
     /// triangle-mesh form, or a failed reconstruction.
     pub skipped: usize,
 }
@@ -41,8 +41,8 @@ pub struct HookCounters {
 /// # When it runs
 /// rapier calls `modify_solver_contacts` at the start of `step`, on the poses the previous step
 /// left (after [`super::TouchPipeline`]'s corrections), for colliders with
-/// `ActiveHooks::MODIFY_SOLVER_CONTACTS`. For such a manifold of a pair whose two colliders have
-/// touch meshes, it reconstructs the pair along its relative motion over the previous step
+/// `ActiveHooks::MODIFY_SOLVER_CONTACTS`. For such a manifold, when rapier finds a solver
+/// contact deeper than the slop and both colliders have touch meshes, it reconstructs the pair along its relative motion over the previous step
 /// (from the pose history the pipeline records), then:
 /// - **penetrating deeper than the slop or perforated, first touch on the last step's path:**
 ///   sets the manifold normal to the first-touch patch normal and, for each solver contact,
@@ -202,7 +202,11 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
 
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
         let (c1, c2) = (context.collider1, context.collider2);
-        let config = if self.meshes.contains_key(&c1) && self.meshes.contains_key(&c2) {
+        // Only manifolds rapier finds deeper than the slop are worth a reconstruction.
+        let deep = context
+            .rigid()
+            .is_some_and(|m| m.solver_contacts.iter().any(|c| c.dist < -self.slop));
+        let config = if deep && self.meshes.contains_key(&c1) && self.meshes.contains_key(&c2) {
             self.reconstruct_pair(context.bodies, context.colliders, c1, c2)
         } else {
             None
@@ -236,9 +240,10 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
                     }
                 }
             }
-            _ => {
+            _ if deep => {
                 self.skipped.fetch_add(1, Ordering::Relaxed);
             }
+            _ => {}
         }
         self.inner.modify_solver_contacts(context);
     }

@@ -24,6 +24,11 @@ pub struct TouchOptions {
     pub correct_poses: bool,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,
+    /// Reconstruct and report touching pairs too. Default `false`: the guard then skips pairs
+    /// that can neither have tunneled (relative step shorter than the safe step length) nor
+    /// penetrate deeper than the slop (parry's contact query), and reports only the pairs it
+    /// reconstructs. `true` reconstructs every pair whose swept boxes meet (slower).
+    pub report_touching: bool,
     /// Options of the reconstructions.
     pub reconstruction: ReconstructionOptions,
 }
@@ -34,6 +39,7 @@ impl Default for TouchOptions {
             penetration_slop: 2.0e-4,
             correct_poses: true,
             max_passes: 3,
+            report_touching: false,
             reconstruction: ReconstructionOptions::default(),
         }
     }
@@ -213,6 +219,41 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
     }
 
+    /// Cheap test before a reconstruction: could the moving collider have tunneled (its
+    /// motion relative to the partner is at least the pair's safe step), or does parry's
+    /// contact query find it deeper than the slop? Shape pairs parry cannot answer for
+    /// (TriMesh against TriMesh) are always reconstructed.
+    fn needs_reconstruction(
+        &self,
+        world: &PhysicsWorld,
+        ch: ColliderHandle,
+        pose: &Pose,
+        d: Vector,
+        ph: ColliderHandle,
+        partner_pose: &Pose,
+    ) -> bool {
+        let (Some(m), Some(f)) = (self.hooks.meshes.get(&ch), self.hooks.meshes.get(&ph)) else {
+            return false;
+        };
+        let (Some(co), Some(partner)) = (world.colliders.get(ch), world.colliders.get(ph)) else {
+            return false;
+        };
+        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner.parent());
+        // A flat partner (zero extent) bounds nothing: the moving object's own extent does.
+        let safe = match (m.mesh.min_extent(), f.mesh.min_extent()) {
+            (a, b) if b > 0.0 => a.min(b),
+            (a, _) => a,
+        };
+        if (d - dp).length() >= safe {
+            return true;
+        }
+        match parry3d::query::contact(partner_pose, partner.shape(), pose, co.shape(), 0.0) {
+            Ok(Some(c)) => c.dist < -self.options.penetration_slop,
+            Ok(None) => false,
+            Err(_) => true,
+        }
+    }
+
     /// Builds (or drops) the touch meshes of opted-in colliders.
     fn refresh_meshes(&mut self, colliders: &ColliderSet) {
         let meshes = &mut self.hooks.meshes;
@@ -312,6 +353,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             None => *partner.position(),
                         };
                         let partner_body = partner.parent();
+                        if !self.options.report_touching
+                            && !self.needs_reconstruction(
+                                world,
+                                ch,
+                                &pose_now,
+                                d,
+                                ph,
+                                &partner_pose,
+                            )
+                        {
+                            continue;
+                        }
                         let Some(config) = pair_configuration(
                             &mut self.reconstructor,
                             &self.hooks.meshes,

@@ -6,6 +6,7 @@
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::scenes::{box_depth_below_floor, drop_world, DropFloor, DROP_BOX_HALF};
 
 const HOOKS: ActiveHooks = ActiveHooks::MODIFY_SOLVER_CONTACTS;
 
@@ -17,43 +18,13 @@ fn world() -> PhysicsWorld {
     w
 }
 
-#[derive(Copy, Clone, Debug)]
-enum Floor {
-    Cuboid,
-    ThinTriMesh,
-}
-
-fn add_floor(w: &mut PhysicsWorld, floor: Floor) {
-    let c = match floor {
-        // Top face at y = 0.
-        Floor::Cuboid => {
-            ColliderBuilder::cuboid(5.0, 0.5, 5.0).translation(Vector::new(0.0, -0.5, 0.0))
-        }
-        Floor::ThinTriMesh => ColliderBuilder::trimesh(
-            vec![
-                Vector::new(-5.0, 0.0, -5.0),
-                Vector::new(5.0, 0.0, -5.0),
-                Vector::new(5.0, 0.0, 5.0),
-                Vector::new(-5.0, 0.0, 5.0),
-            ],
-            vec![[0, 2, 1], [0, 3, 2]],
-        )
-        .unwrap(),
-    };
-    w.insert_collider(c.active_hooks(HOOKS), None);
-}
-
-/// Lowest point of a box of half extent `h` at `pose`.
-fn lowest(pose: &Pose, h: f32) -> f32 {
-    let mut m = f32::MAX;
-    for sx in [-h, h] {
-        for sy in [-h, h] {
-            for sz in [-h, h] {
-                m = m.min(pose.transform_point(Vector::new(sx, sy, sz)).y);
-            }
-        }
-    }
-    m
+fn add_floor(w: &mut PhysicsWorld) {
+    w.insert_collider(
+        ColliderBuilder::cuboid(5.0, 0.5, 5.0)
+            .translation(Vector::new(0.0, -0.5, 0.0))
+            .active_hooks(HOOKS),
+        None,
+    );
 }
 
 struct DropResult {
@@ -61,19 +32,8 @@ struct DropResult {
     max_penetration: f32,
 }
 
-fn drop_box(speed: f32, floor: Floor, with_crate: bool, steps: usize) -> DropResult {
-    let mut w = world();
-    add_floor(&mut w, floor);
-    let h = 0.25;
-    let b = w.insert_body(
-        RigidBodyBuilder::dynamic()
-            .translation(Vector::new(0.0, 3.0, 0.0))
-            .linvel(Vector::new(0.0, -speed, 0.0)),
-    );
-    w.insert_collider(
-        ColliderBuilder::cuboid(h, h, h).active_hooks(HOOKS),
-        Some(b),
-    );
+fn drop_box(speed: f32, floor: DropFloor, with_crate: bool, steps: usize) -> DropResult {
+    let (mut w, b) = drop_world(speed, floor);
     let mut touch = TouchPipeline::default();
     let mut r = DropResult {
         tunneled: false,
@@ -89,7 +49,9 @@ fn drop_box(speed: f32, floor: Floor, with_crate: bool, steps: usize) -> DropRes
         if pose.translation.y < 0.0 {
             r.tunneled = true;
         } else {
-            r.max_penetration = r.max_penetration.max(-lowest(&pose, h));
+            r.max_penetration = r
+                .max_penetration
+                .max(box_depth_below_floor(&pose, DROP_BOX_HALF));
         }
     }
     r
@@ -97,7 +59,7 @@ fn drop_box(speed: f32, floor: Floor, with_crate: bool, steps: usize) -> DropRes
 
 #[test]
 fn fast_boxes_never_tunnel_and_penetrate_at_most_1mm() {
-    for floor in [Floor::Cuboid, Floor::ThinTriMesh] {
+    for floor in [DropFloor::Cuboid, DropFloor::ThinTriMesh] {
         for speed in [1.0, 5.0, 20.0, 50.0, 100.0] {
             let r = drop_box(speed, floor, true, 120);
             assert!(!r.tunneled, "{floor:?} at {speed} m/s tunneled");
@@ -114,13 +76,13 @@ fn fast_boxes_never_tunnel_and_penetrate_at_most_1mm() {
 /// thin floor at 100 m/s.
 #[test]
 fn vanilla_rapier_without_ccd_tunnels_through_the_thin_floor() {
-    assert!(drop_box(100.0, Floor::ThinTriMesh, false, 30).tunneled);
+    assert!(drop_box(100.0, DropFloor::ThinTriMesh, false, 30).tunneled);
 }
 
 #[test]
 fn resting_stack_of_three_boxes_stays_still() {
     let mut w = world();
-    add_floor(&mut w, Floor::Cuboid);
+    add_floor(&mut w);
     let h = 0.25;
     let boxes: Vec<RigidBodyHandle> = (0..3)
         .map(|i| {
@@ -234,7 +196,7 @@ fn u_shaped_trimesh_rests_on_both_legs_over_a_bump() {
 #[test]
 fn removals_sleep_and_colliderless_bodies_do_not_break_the_hooks() {
     let mut w = world();
-    add_floor(&mut w, Floor::Cuboid);
+    add_floor(&mut w);
     let mut bodies = Vec::new();
     for i in 0..4 {
         let b = w.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
