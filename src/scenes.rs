@@ -425,3 +425,63 @@ pub fn box_depth_below_floor(pose: &Pose, half: Real) -> Real {
     }
     (-lowest).max(0.0)
 }
+
+/// A rapier world (dt = 1/60, contact clustering off) with `n` dynamic 0.5 m boxes that never
+/// sleep, in a square grid 1 m apart just above a fixed 20 m TriMesh floor (32 × 32 quads).
+/// With `touch_hooks`, every collider opts into the touch hooks. Used by the `step_overhead`
+/// benchmark.
+pub fn boxes_on_trimesh_floor(n: usize, touch_hooks: bool) -> rapier3d::pipeline::PhysicsWorld {
+    use rapier3d::prelude::*;
+    let hooks = if touch_hooks {
+        ActiveHooks::MODIFY_SOLVER_CONTACTS
+    } else {
+        ActiveHooks::empty()
+    };
+    let mut w = PhysicsWorld::default();
+    w.integration_parameters.dt = 1.0 / 60.0;
+    w.integration_parameters.contact_clustering = false;
+    let q = 32;
+    let mut v = Vec::new();
+    let mut idx = Vec::new();
+    for i in 0..=q {
+        for j in 0..=q {
+            v.push(Vector::new(
+                -10.0 + 20.0 * i as Real / q as Real,
+                0.0,
+                -10.0 + 20.0 * j as Real / q as Real,
+            ));
+        }
+    }
+    for i in 0..q {
+        for j in 0..q {
+            let a = (i * (q + 1) + j) as u32;
+            let b = a + (q + 1) as u32;
+            idx.push([a, a + 1, b]);
+            idx.push([b, a + 1, b + 1]);
+        }
+    }
+    w.insert_collider(
+        ColliderBuilder::trimesh(v, idx)
+            .expect("a valid grid")
+            .active_hooks(hooks),
+        None,
+    );
+    let side = (n as Real).sqrt().ceil() as usize;
+    for k in 0..n {
+        let (i, j) = (k / side, k % side);
+        let b = w.insert_body(
+            RigidBodyBuilder::dynamic()
+                .can_sleep(false)
+                .translation(Vector::new(
+                    i as Real - side as Real / 2.0,
+                    0.26,
+                    j as Real - side as Real / 2.0,
+                )),
+        );
+        w.insert_collider(
+            ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(hooks),
+            Some(b),
+        );
+    }
+    w
+}
