@@ -1,7 +1,13 @@
 //! Step overhead of the touch pipeline: 100 dynamic boxes (never sleeping) resting on a fixed
-//! TriMesh floor, one `step` of vanilla rapier (`PhysicsWorld::step`, no hooks) against one
-//! `TouchPipeline::step` (hooks opted in, step guard, reports), in the same run. The ratio
-//! touch / rapier is the overhead. Run with `cargo bench --bench step_overhead`.
+//! TriMesh floor, in the same run:
+//! - `rapier`: vanilla `PhysicsWorld::step`, no hooks;
+//! - `rapier_hook_flags`: vanilla step with `ActiveHooks::MODIFY_SOLVER_CONTACTS` set on every
+//!   collider (rapier then never recycles their contacts: rapier's own cost of hooks);
+//! - `touch_hooks`: `TouchPipeline::step` with the hook flags (hooks, guard, reports);
+//! - `touch_tracked`: `TouchPipeline::step` with the colliders tracked instead (guard and
+//!   reports, no rapier hooks).
+//!
+//! Run with `cargo bench --bench step_overhead`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rapier_touch::prelude::*;
@@ -33,7 +39,19 @@ fn bench(c: &mut Criterion) {
     for _ in 0..60 {
         touch.step(&mut world);
     }
-    g.bench_function("touch", |b| b.iter(|| touch.step(&mut world)));
+    g.bench_function("touch_hooks", |b| b.iter(|| touch.step(&mut world)));
+
+    // The step guard and reports without rapier hooks: colliders tracked by the pipeline.
+    let mut world = boxes_on_trimesh_floor(100, false);
+    let mut touch = TouchPipeline::default();
+    let handles: Vec<_> = world.colliders.iter().map(|(h, _)| h).collect();
+    for h in handles {
+        touch.track_collider(h);
+    }
+    for _ in 0..60 {
+        touch.step(&mut world);
+    }
+    g.bench_function("touch_tracked", |b| b.iter(|| touch.step(&mut world)));
     g.finish();
 }
 

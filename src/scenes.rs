@@ -469,15 +469,13 @@ pub fn boxes_on_trimesh_floor(n: usize, touch_hooks: bool) -> rapier3d::pipeline
     let side = (n as Real).sqrt().ceil() as usize;
     for k in 0..n {
         let (i, j) = (k / side, k % side);
-        let b = w.insert_body(
-            RigidBodyBuilder::dynamic()
-                .can_sleep(false)
-                .translation(Vector::new(
-                    i as Real - side as Real / 2.0,
-                    0.26,
-                    j as Real - side as Real / 2.0,
-                )),
-        );
+        let b = w.insert_body(RigidBodyBuilder::dynamic().can_sleep(false).translation(
+            Vector::new(
+                i as Real - side as Real / 2.0,
+                0.26,
+                j as Real - side as Real / 2.0,
+            ),
+        ));
         w.insert_collider(
             ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(hooks),
             Some(b),

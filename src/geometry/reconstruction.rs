@@ -282,7 +282,9 @@ impl Reconstructor {
         if s_hi < -tol {
             return Ok(result);
         }
-        let s_max = s_hi.min(traj_len);
+        // A touch up to one tolerance before the start of the step still counts as on the step
+        // (a start pose that overlaps by a rounding error).
+        let s_max = s_hi.min(traj_len + tol);
         // Only the largest touch matters for the first touch: a bounded search.
         let first_touch = self.collect_first_touch(fixed, moving, &fr, -tol, s_max);
         result.candidate_pairs = self.ws.pairs.len();

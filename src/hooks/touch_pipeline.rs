@@ -55,8 +55,9 @@ struct Tool {
 
 /// Steps a rapier [`PhysicsWorld`] with exact touch contacts.
 ///
-/// Colliders take part when they have `ActiveHooks::MODIFY_SOLVER_CONTACTS` and a shape with a
-/// triangle-mesh form ([`TouchMesh::from_shape`]). Each [`TouchPipeline::step`]:
+/// Colliders take part when they have `ActiveHooks::MODIFY_SOLVER_CONTACTS` (hooks, guard and
+/// reports) or were given to [`TouchPipeline::track_collider`] (guard and reports, no rapier
+/// hooks), and have a shape with a triangle-mesh form ([`TouchMesh::from_shape`]). Each [`TouchPipeline::step`]:
 /// 1. records every body's pose (the history the reconstruction walks back along);
 /// 2. runs rapier's step with [`TouchHooks`] (which forward to your hooks);
 /// 3. **step guard:** for every moving dynamic body, reconstructs it against each opted-in
@@ -107,6 +108,9 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     reports: Vec<PairReport>,
     tools: HashMap<RigidBodyHandle, Tool>,
     corrections: usize,
+    odometers: HashMap<RigidBodyHandle, Real>,
+    tracked: HashSet<ColliderHandle>,
+    pair_states: HashMap<(ColliderHandle, ColliderHandle), PairState>,
 }
 
 impl Default for TouchPipeline<()> {
@@ -133,6 +137,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             reports: Vec::new(),
             tools: HashMap::new(),
             corrections: 0,
+            odometers: HashMap::new(),
+            tracked: HashSet::new(),
+            pair_states: HashMap::new(),
         }
     }
 
@@ -145,6 +152,20 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// How many body poses the step guard corrected during the last step.
     pub fn corrections(&self) -> usize {
         self.corrections
+    }
+
+    /// Guards and reports `collider` without rapier hooks. Colliders with
+    /// `ActiveHooks::MODIFY_SOLVER_CONTACTS` are guarded anyway and also get their manifolds
+    /// rewritten; but rapier never recycles the contacts of a pair with active hooks (1.8x its
+    /// step time with 100 boxes on a TriMesh floor, see the README), so colliders that only need
+    /// the step guard, the tool proxies and the reports are cheaper tracked this way.
+    pub fn track_collider(&mut self, collider: ColliderHandle) {
+        self.tracked.insert(collider);
+    }
+
+    /// Stops tracking `collider` (see [`TouchPipeline::track_collider`]).
+    pub fn untrack_collider(&mut self, collider: ColliderHandle) {
+        self.tracked.remove(&collider);
     }
 
     /// Drives kinematic body `body` as a tool toward `device` (a mouse or haptic device pose).
@@ -219,49 +240,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
     }
 
-    /// Cheap test before a reconstruction: could the moving collider have tunneled (its
-    /// motion relative to the partner is at least the pair's safe step), or does parry's
-    /// contact query find it deeper than the slop? Shape pairs parry cannot answer for
-    /// (TriMesh against TriMesh) are always reconstructed.
-    fn needs_reconstruction(
-        &self,
-        world: &PhysicsWorld,
-        ch: ColliderHandle,
-        pose: &Pose,
-        d: Vector,
-        ph: ColliderHandle,
-        partner_pose: &Pose,
-    ) -> bool {
-        let (Some(m), Some(f)) = (self.hooks.meshes.get(&ch), self.hooks.meshes.get(&ph)) else {
-            return false;
-        };
-        let (Some(co), Some(partner)) = (world.colliders.get(ch), world.colliders.get(ph)) else {
-            return false;
-        };
-        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner.parent());
-        // A flat partner (zero extent) bounds nothing: the moving object's own extent does.
-        let safe = match (m.mesh.min_extent(), f.mesh.min_extent()) {
-            (a, b) if b > 0.0 => a.min(b),
-            (a, _) => a,
-        };
-        if (d - dp).length() >= safe {
-            return true;
-        }
-        match parry3d::query::contact(partner_pose, partner.shape(), pose, co.shape(), 0.0) {
-            Ok(Some(c)) => c.dist < -self.options.penetration_slop,
-            Ok(None) => false,
-            Err(_) => true,
-        }
-    }
-
     /// Builds (or drops) the touch meshes of opted-in colliders.
     fn refresh_meshes(&mut self, colliders: &ColliderSet) {
+        self.tracked.retain(|h| colliders.contains(*h));
         let meshes = &mut self.hooks.meshes;
         meshes.retain(|h, _| colliders.contains(*h));
         for (h, co) in colliders.iter() {
             if !co
                 .active_hooks()
                 .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+                && !self.tracked.contains(&h)
             {
                 meshes.remove(&h);
                 continue;
@@ -289,16 +277,50 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
     /// The step guard: moves bodies that penetrate (or went through something) back to first
     /// touch, and records the reports.
+    ///
+    /// Work is bounded three ways. A body slower than its safe step length cannot have tunneled,
+    /// so only the partners rapier's narrow phase already pairs it with are looked at (a swept
+    /// box query otherwise). A pair whose last measured overlap plus the distance both bodies
+    /// travelled since (their odometers) stays under the slop is skipped. Other pairs get
+    /// parry's contact query, and a reconstruction only when it finds them deeper than the slop
+    /// (or when parry has no query for the shapes, such as TriMesh against TriMesh).
     fn guard(&mut self, world: &mut PhysicsWorld) {
         let passes = if self.options.correct_poses {
             self.options.max_passes.max(1)
         } else {
             1
         };
+        let slop = self.options.penetration_slop;
+        let prediction = world.integration_parameters.prediction_distance();
+        // Odometers: distance every point of each moving body may have travelled.
+        for (h, b) in world.bodies.iter() {
+            let Some(prev) = self.hooks.prev_poses.get(&h) else {
+                continue;
+            };
+            let pose = b.position();
+            let radius = b
+                .colliders()
+                .iter()
+                .filter_map(|c| world.colliders.get(*c))
+                .map(|c| {
+                    c.position_wrt_parent()
+                        .map_or(0.0, |p| p.translation.length())
+                        + c.shape().compute_local_bounding_sphere().radius
+                })
+                .fold(0.0, Real::max);
+            let step = (pose.translation - prev.translation).length()
+                + prev.rotation.angle_between(pose.rotation) * radius;
+            if step > 0.0 && step.is_finite() {
+                *self.odometers.entry(h).or_insert(0.0) += step;
+            }
+        }
+        self.odometers.retain(|h, _| world.bodies.contains(*h));
+        self.pair_states
+            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
+
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::new();
         for pass in 0..passes {
             let mut moved = false;
-            // Moving bodies with opted-in colliders.
             let movers: Vec<RigidBodyHandle> = world
                 .bodies
                 .iter()
@@ -317,31 +339,54 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 };
                 let body_pose = *body.position();
                 let d = body_motion(&self.hooks.prev_poses, &world.bodies, Some(bh));
+                let is_tool = self.tools.contains_key(&bh);
                 let own: Vec<ColliderHandle> = body.colliders().to_vec();
                 for ch in own {
-                    if !self.hooks.meshes.contains_key(&ch) {
+                    let Some(mesh) = self.hooks.meshes.get(&ch).map(|m| m.mesh.clone()) else {
                         continue;
-                    }
+                    };
                     let Some(co) = world.colliders.get(ch) else {
                         continue;
                     };
                     let pose_now = co
                         .position_wrt_parent()
                         .map_or(*co.position(), |rel| body_pose * *rel);
-                    let prev_pose = Pose::from_parts(pose_now.translation - d, pose_now.rotation);
-                    let swept = co
-                        .shape()
-                        .compute_aabb(&pose_now)
-                        .merged(&co.shape().compute_aabb(&prev_pose));
-                    let partners: Vec<ColliderHandle> = world
-                        .intersect_aabb_conservative(swept, QueryFilter::default())
-                        .filter(|(h, c)| {
-                            *h != ch && c.parent() != Some(bh) && self.hooks.meshes.contains_key(h)
-                        })
-                        .map(|(h, _)| h)
-                        .collect();
+                    let fast = d.length() >= mesh.min_extent().min(prediction);
+                    // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
+                    // (rapier's default collision types): always query them.
+                    let partners: Vec<ColliderHandle> = if fast || pass > 0 || is_tool {
+                        let prev_pose =
+                            Pose::from_parts(pose_now.translation - d, pose_now.rotation);
+                        let swept = co
+                            .shape()
+                            .compute_aabb(&pose_now)
+                            .merged(&co.shape().compute_aabb(&prev_pose));
+                        world
+                            .intersect_aabb_conservative(swept, QueryFilter::default())
+                            .map(|(h, _)| h)
+                            .collect()
+                    } else {
+                        world
+                            .narrow_phase
+                            .contact_pairs_with(ch)
+                            .map(|p| {
+                                if p.collider1 == ch {
+                                    p.collider2
+                                } else {
+                                    p.collider1
+                                }
+                            })
+                            .collect()
+                    };
                     for ph in partners {
                         let Some(partner) = world.colliders.get(ph) else {
+                            continue;
+                        };
+                        if ph == ch || partner.parent() == Some(bh) {
+                            continue;
+                        }
+                        let Some(partner_mesh) = self.hooks.meshes.get(&ph).map(|m| m.mesh.clone())
+                        else {
                             continue;
                         };
                         let partner_pose = match partner.parent() {
@@ -353,17 +398,50 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             None => *partner.position(),
                         };
                         let partner_body = partner.parent();
-                        if !self.options.report_touching
-                            && !self.needs_reconstruction(
-                                world,
-                                ch,
-                                &pose_now,
-                                d,
-                                ph,
+                        let odo = |h: Option<RigidBodyHandle>| {
+                            h.and_then(|h| self.odometers.get(&h).copied())
+                                .unwrap_or(0.0)
+                        };
+                        let (odo_self, odo_partner) = (odo(Some(bh)), odo(partner_body));
+                        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner_body);
+                        let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
+                            (a, b) if b > 0.0 => a.min(b),
+                            (a, _) => a,
+                        };
+                        let may_tunnel = (d - dp).length() >= safe;
+                        if !self.options.report_touching && !may_tunnel {
+                            // Skip pairs whose overlap cannot have grown past the slop.
+                            if let Some(st) = self.pair_states.get(&(ch, ph)) {
+                                let bound = st.overlap
+                                    + (odo_self - st.odo_self)
+                                    + (odo_partner - st.odo_partner);
+                                if bound <= slop {
+                                    continue;
+                                }
+                            }
+                            match parry3d::query::contact(
                                 &partner_pose,
-                            )
-                        {
-                            continue;
+                                partner.shape(),
+                                &pose_now,
+                                co.shape(),
+                                0.0,
+                            ) {
+                                Ok(c) => {
+                                    let overlap = c.map_or(0.0, |c| (-c.dist).max(0.0));
+                                    self.pair_states.insert(
+                                        (ch, ph),
+                                        PairState {
+                                            overlap,
+                                            odo_self,
+                                            odo_partner,
+                                        },
+                                    );
+                                    if overlap <= slop {
+                                        continue;
+                                    }
+                                }
+                                Err(_) => {}
+                            }
                         }
                         let Some(config) = pair_configuration(
                             &mut self.reconstructor,
@@ -393,12 +471,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                         zero_motion_direction: Some(-n),
                                         ..self.options.reconstruction
                                     });
-                                    let fixed = &self.hooks.meshes.get(&ph)?.mesh;
-                                    let moving = &self.hooks.meshes.get(&ch)?.mesh;
                                     rec.reconstruct(
-                                        fixed,
+                                        &partner_mesh,
                                         &partner_pose,
-                                        moving,
+                                        &mesh,
                                         &pose_now,
                                         &pose_now,
                                     )
@@ -417,20 +493,19 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         if !self.options.correct_poses
                             || !config.needs_correction()
                             || !config.on_trajectory
-                            || (config.state == TouchState::Penetrating
-                                && config.depth <= self.options.penetration_slop)
+                            || (config.state == TouchState::Penetrating && config.depth <= slop)
                         {
                             continue;
                         }
                         let r = config.reversing_vector;
                         let n = config.patches.first().map(|p| p.normal);
                         // Split the correction by inverse mass when the partner is dynamic too.
-                        let partner_dynamic = partner_body
+                        let partner_mass = partner_body
                             .and_then(|pb| world.bodies.get(pb))
                             .filter(|b| b.is_dynamic())
                             .map(|b| b.mass());
                         let own_mass = world.bodies.get(bh).map_or(1.0, |b| b.mass());
-                        let share = match partner_dynamic {
+                        let share = match partner_mass {
                             Some(mp) if mp > 0.0 && own_mass > 0.0 => {
                                 (1.0 / own_mass) / (1.0 / own_mass + 1.0 / mp)
                             }
@@ -459,6 +534,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 }
                             }
                         }
+                        self.pair_states.insert(
+                            (ch, ph),
+                            PairState {
+                                overlap: 0.0,
+                                odo_self,
+                                odo_partner,
+                            },
+                        );
                         moved = true;
                         self.corrections += 1;
                         break;
@@ -470,6 +553,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             }
         }
     }
+}
+
+/// The overlap of a pair when it was last measured, and both bodies' odometers then.
+#[derive(Copy, Clone, Debug)]
+struct PairState {
+    overlap: Real,
+    odo_self: Real,
+    odo_partner: Real,
 }
 
 /// rapier's contact normal for the pair (from its deepest contact), oriented out of `fixed`

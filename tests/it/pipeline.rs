@@ -239,3 +239,70 @@ fn removals_sleep_and_colliderless_bodies_do_not_break_the_hooks() {
         .iter()
         .all(|r| w.colliders.get(r.moving).is_some()));
 }
+
+/// Touch mode: a kinematic tool driven 30 cm into a fixed block stops at first touch (its
+/// proxy), and the device-to-proxy offset is the distance the device went in.
+#[test]
+fn tool_proxy_stops_at_first_touch_and_reports_the_offset() {
+    let mut w = world();
+    add_floor(&mut w);
+    let tool = w.insert_body(
+        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, 1.0, 0.0)),
+    );
+    w.insert_collider(
+        ColliderBuilder::cuboid(0.1, 0.1, 0.1).active_hooks(HOOKS),
+        Some(tool),
+    );
+    let mut touch = TouchPipeline::default();
+    let mut y = 1.0;
+    let mut saw_face = false;
+    for _ in 0..120 {
+        y -= 0.01; // 0.6 m/s down, ending at y = -0.2
+        touch.set_tool_target(tool, Pose::from_translation(Vector::new(0.0, y, 0.0)));
+        touch.step(&mut w);
+        let proxy_bottom = w.bodies[tool].translation().y - 0.1;
+        assert!(
+            proxy_bottom >= -1e-3,
+            "tool went {} m into the block",
+            -proxy_bottom
+        );
+        saw_face |= touch
+            .reports()
+            .iter()
+            .any(|r| r.patches.iter().any(|p| p.kind == ContactKind::Face));
+    }
+    let fb = touch.tool_feedback(tool).unwrap();
+    assert!(
+        (fb.proxy.translation.y - 0.1).abs() < 1e-3,
+        "proxy at {}",
+        fb.proxy.translation.y
+    );
+    assert!((fb.device.translation.y - y).abs() < 1e-6);
+    assert!(
+        (fb.offset.y - (0.1 - y)).abs() < 1e-3,
+        "offset {:?}",
+        fb.offset
+    );
+    assert!(saw_face, "the tool's bottom face touched the block");
+}
+
+/// The guard works without rapier hooks for tracked colliders.
+#[test]
+fn tracked_colliders_are_guarded_without_hooks() {
+    let (mut w, b) = drop_world(100.0, DropFloor::ThinTriMesh);
+    let handles: Vec<_> = w.colliders.iter().map(|(h, _)| h).collect();
+    for h in &handles {
+        w.colliders[*h].set_active_hooks(ActiveHooks::empty());
+    }
+    let mut touch = TouchPipeline::default();
+    for h in handles {
+        touch.track_collider(h);
+    }
+    for _ in 0..60 {
+        touch.step(&mut w);
+        let pose = *w.bodies[b].position();
+        assert!(pose.translation.y > 0.0, "tunneled");
+        assert!(box_depth_below_floor(&pose, DROP_BOX_HALF) <= 1e-3);
+    }
+    assert_eq!(touch.hooks.counters().rewritten, 0);
+}
