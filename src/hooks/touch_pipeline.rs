@@ -419,28 +419,25 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     continue;
                                 }
                             }
-                            match parry3d::query::contact(
+                            if let Ok(c) = parry3d::query::contact(
                                 &partner_pose,
                                 partner.shape(),
                                 &pose_now,
                                 co.shape(),
                                 0.0,
                             ) {
-                                Ok(c) => {
-                                    let overlap = c.map_or(0.0, |c| (-c.dist).max(0.0));
-                                    self.pair_states.insert(
-                                        (ch, ph),
-                                        PairState {
-                                            overlap,
-                                            odo_self,
-                                            odo_partner,
-                                        },
-                                    );
-                                    if overlap <= slop {
-                                        continue;
-                                    }
+                                let overlap = c.map_or(0.0, |c| (-c.dist).max(0.0));
+                                self.pair_states.insert(
+                                    (ch, ph),
+                                    PairState {
+                                        overlap,
+                                        odo_self,
+                                        odo_partner,
+                                    },
+                                );
+                                if overlap <= slop {
+                                    continue;
                                 }
-                                Err(_) => {}
                             }
                         }
                         let Some(config) = pair_configuration(
