@@ -65,3 +65,8 @@ pub mod prelude {
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use parry3d::shape::{ConvexPolyhedron, Cuboid, TriMesh};
 }
+
+/// The README's code blocks, compiled and run as doctests so the README stays true.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
