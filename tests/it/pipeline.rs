@@ -306,3 +306,32 @@ fn tracked_colliders_are_guarded_without_hooks() {
     }
     assert_eq!(touch.hooks.counters().rewritten, 0);
 }
+
+/// A moving TriMesh body (which rapier's CCD never sweeps) dropped at 100 m/s onto the
+/// zero-thickness TriMesh floor does not go through.
+#[test]
+fn fast_trimesh_body_does_not_tunnel() {
+    use rapier_touch::geometry::generators::subdivided_box;
+    let (mut w, _) = drop_world(0.0, DropFloor::ThinTriMesh);
+    let (v, i) = subdivided_box(Vector::splat(0.25), 2);
+    let b = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(2.0, 3.0, 0.0))
+            .linvel(Vector::new(0.0, -100.0, 0.0)),
+    );
+    w.insert_collider(
+        ColliderBuilder::trimesh(v, i).unwrap().active_hooks(HOOKS),
+        Some(b),
+    );
+    let mut touch = TouchPipeline::default();
+    for _ in 0..60 {
+        touch.step(&mut w);
+        let pose = *w.bodies[b].position();
+        assert!(
+            pose.translation.y > 0.0,
+            "tunneled: y = {}",
+            pose.translation.y
+        );
+        assert!(box_depth_below_floor(&pose, 0.25) <= 1e-3);
+    }
+}
