@@ -31,6 +31,7 @@
 //! ## Layers
 //! Lower layers never name a rapier handle or set:
 //! - [`geometry`]: pure geometry, the paper's eq. (1)-(3) (no pipeline).
+//! - [`surface`]: the soft-surface model, the paper's eq. (3)-(10) (no pipeline).
 //! - [`hooks`]: the rapier integration: [`hooks::TouchPipeline`] steps a `PhysicsWorld` with
 //!   [`hooks::TouchHooks`], a step guard against tunneling, tool proxies and contact reports.
 //!
@@ -51,6 +52,7 @@ pub mod geometry;
 pub mod hooks;
 pub mod math;
 pub mod scenes;
+pub mod surface;
 
 /// Everything a user needs, in one import.
 pub mod prelude {
@@ -63,6 +65,10 @@ pub mod prelude {
         HookCounters, PairReport, ToolFeedback, TouchHooks, TouchOptions, TouchPipeline,
     };
     pub use crate::math::{Pose, Real, Rotation, Vector};
+    pub use crate::surface::{
+        FilterKind, ForceProfile, Integrator, MassDistribution, MassSpringSurface,
+        MassSpringSurfaceBuilder, SpringModel, SurfaceError,
+    };
     pub use parry3d::shape::{ConvexPolyhedron, Cuboid, TriMesh};
 }
 

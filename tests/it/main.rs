@@ -5,3 +5,4 @@ mod fig4;
 mod pipeline;
 mod reconstruction_bad_input;
 mod reconstruction_properties;
+mod surface;

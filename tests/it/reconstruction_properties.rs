@@ -89,8 +89,16 @@ fn check_touching(
     // Touching.
     let d = surface_distance(fixed, pose_f, moving, &at);
     prop_assert!(d <= 1e-5 * scale, "distance after reversal {d}");
-    // Not penetrating: a hair behind, the surfaces are apart.
-    let behind = shifted(&at, -1e-4 * scale * u);
+    // Not penetrating: a hair behind, the surfaces are apart. Walking back by δ separates them
+    // by δ |n·u| (n the contact normal), so δ is chosen for a 1e-4·scale gap, which parry's f32
+    // GJK resolves; up to the start of the step the way back is free by definition.
+    let nu = c
+        .patches
+        .iter()
+        .map(|p| p.normal.dot(u).abs())
+        .fold(1.0f32, f32::min)
+        .max(1e-3);
+    let behind = shifted(&at, -(1e-4 * scale / nu) * u);
     prop_assert!(
         !surfaces_intersect(fixed, pose_f, moving, &behind),
         "penetrates after reversal: distance behind {}, at {}, state {:?}, depth {}",

@@ -1,0 +1,377 @@
+//! The paper's global filter, eq. (8)-(10).
+//!
+//! Implicit Euler with the forces linearized at the start of the step (eq. 5-7) gives, per
+//! coordinate and for the free (unpinned) vertices,
+//!
+//! ```text
+//! S Δv = dt (Fⁿ + dt K vⁿ),      S = M - dt² K - dt C            (eq. 7)
+//! Δv   = W M⁻¹ dt (Fⁿ + dt K vⁿ), W = (I - K dt²/m - C dt/m)⁻¹ = S⁻¹ M   (eq. 8)
+//! ```
+//!
+//! where `K = -Lk` and `C = -Lc` are the stiffness and damping graph Laplacians of the edges
+//! (each `N × N`, applied to the three coordinates alike, as the paper "compounds" its 1D
+//! matrix). `S` is symmetric positive definite whenever every mass is positive, so it is
+//! factored once (sparse Cholesky, faer) and each step costs two triangular solves with three
+//! right-hand sides; the dense `W` is never formed (except on request, for analysis).
+//!
+//! The `dt K vⁿ` term is the part of the Taylor expansion `K Δx = K dt (vⁿ + Δv)` known at the
+//! start of the step: the spring force change the current velocity will cause over the step.
+//! The paper calls it artificial viscosity; it is what makes the update implicit in position and
+//! not only in velocity. Without it a stiff surface keeps oscillating at `dt` far above the
+//! explicit limit.
+//!
+//! **The immediate-neighbour filter** (the paper's simplification, eq. 10 restricted to the
+//! 1-ring): with `D = diag(S)` and `B = I - D^{-1/2} S D^{-1/2}`,
+//! `S⁻¹ = D^{-1/2} (I - B)⁻¹ D^{-1/2} ≈ D^{-1/2} (I + B + … + B^r) D^{-1/2}`. With `r = 1` this is
+//! the paper's first-order Neumann polynomial `2D⁻¹ - D⁻¹ S D⁻¹`, with the sparsity of the mesh;
+//! each further term widens it by one ring. `‖B‖ ≤ s/(1+s)` per vertex, with
+//! `s = dt²Σk/m + dt Σc/m`, so the truncation error shrinks like `(s/(1+s))^(r+1)`: the filter is
+//! close to `W` only while `s` is small.
+//!
+//! **Correction to the paper:** the truncated series does not reproduce rigid motion (its rows of
+//! `W` do not sum to one), so a free surface drifts and momentum is not conserved. A diagonal
+//! correction `P + diag(δ)` with `δ_i = (1 - (P S 1)_i) / (S 1)_i` makes the approximation exact on
+//! the constant vector, which restores both (with no pins, `S 1 = M 1`), at no cost per step.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::matmul::sparse_sparse_matmul;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Par, Side};
+use glamx::DVec3;
+
+/// Why a filter could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FilterError {
+    /// The system matrix is not positive definite (a zero or negative mass, or a negative
+    /// stiffness or damping slipped through).
+    #[error("the implicit system is not positive definite")]
+    NotPositiveDefinite,
+    /// faer failed (out of memory, index overflow).
+    #[error("sparse factorization failed: {0}")]
+    Faer(String),
+}
+
+/// Which filter `W` the implicit integrator applies.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum FilterKind {
+    /// The exact filter: `S` prefactored by sparse Cholesky, two triangular solves per step.
+    Exact,
+    /// The truncated Neumann series with `rings` terms beyond the identity: `rings = 1` is the
+    /// paper's immediate-neighbour filter, each extra ring widens the stencil by one ring of
+    /// neighbours and cuts the error by a factor of about `s/(1+s)`.
+    Neighbour {
+        /// Number of Neumann terms after the identity (1 = immediate neighbours). At least 1.
+        rings: u32,
+    },
+}
+
+/// A symmetric sparse matrix in compressed rows, read once per pass by a `Vec3` product.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Csr {
+    pub n: usize,
+    pub ptr: Vec<usize>,
+    pub idx: Vec<u32>,
+    pub val: Vec<f64>,
+}
+
+impl Csr {
+    /// `y = A x` over `Vec3`s (one read of the matrix).
+    #[inline]
+    pub fn mul_vec3(&self, x: &[DVec3], y: &mut [DVec3]) {
+        for (i, yi) in y.iter_mut().enumerate().take(self.n) {
+            let mut acc = DVec3::ZERO;
+            for k in self.ptr[i]..self.ptr[i + 1] {
+                acc += x[self.idx[k] as usize] * self.val[k];
+            }
+            *yi = acc;
+        }
+    }
+
+    fn from_faer(m: &SparseColMat<u32, f64>) -> Self {
+        // Symmetric: the columns are the rows.
+        let n = m.ncols();
+        let sym = m.symbolic();
+        let mut ptr = Vec::with_capacity(n + 1);
+        let mut idx = Vec::new();
+        let mut val = Vec::new();
+        ptr.push(0);
+        for j in 0..n {
+            let rows = sym.row_idx_of_col_raw(j);
+            let vals = m.val_of_col(j);
+            for (r, v) in rows.iter().zip(vals) {
+                if *v != 0.0 {
+                    idx.push(*r);
+                    val.push(*v);
+                }
+            }
+            ptr.push(idx.len());
+        }
+        Self { n, ptr, idx, val }
+    }
+
+    fn to_faer(&self) -> Result<SparseColMat<u32, f64>, FilterError> {
+        let mut t = Vec::with_capacity(self.val.len());
+        for i in 0..self.n {
+            for k in self.ptr[i]..self.ptr[i + 1] {
+                t.push(Triplet::new(self.idx[k], i as u32, self.val[k]));
+            }
+        }
+        SparseColMat::try_new_from_triplets(self.n, self.n, &t)
+            .map_err(|e| FilterError::Faer(format!("{e:?}")))
+    }
+}
+
+/// The implicit system of the free vertices: `S = M + dt² Lk + dt Lc` (eq. 7), kept as its
+/// graph so that `dt`, stiffness and damping can change without rebuilding the mesh.
+#[derive(Clone, Debug)]
+pub(crate) struct System {
+    /// Mass of each free vertex.
+    pub mass: Vec<f64>,
+    /// Springs between two free vertices: (a, b, k, c), free indices.
+    pub pairs: Vec<(u32, u32, f64, f64)>,
+    /// Springs from a free vertex to a pinned one: (a, k, c).
+    pub anchors: Vec<(u32, f64, f64)>,
+}
+
+impl System {
+    /// `S` for time step `dt`, as a symmetric CSR matrix (diagonal included).
+    pub fn matrix(&self, dt: f64) -> Csr {
+        let n = self.mass.len();
+        let mut diag: Vec<f64> = self.mass.clone();
+        let mut rows: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+        for &(a, b, k, c) in &self.pairs {
+            let w = dt * dt * k + dt * c;
+            diag[a as usize] += w;
+            diag[b as usize] += w;
+            rows[a as usize].push((b, -w));
+            rows[b as usize].push((a, -w));
+        }
+        for &(a, k, c) in &self.anchors {
+            diag[a as usize] += dt * dt * k + dt * c;
+        }
+        let mut ptr = Vec::with_capacity(n + 1);
+        let mut idx = Vec::new();
+        let mut val = Vec::new();
+        ptr.push(0);
+        for (i, mut r) in rows.into_iter().enumerate() {
+            r.push((i as u32, diag[i]));
+            r.sort_unstable_by_key(|e| e.0);
+            // Parallel edges (duplicates) add up.
+            let mut last = u32::MAX;
+            for (j, v) in r {
+                if j == last {
+                    *val.last_mut().expect("pushed above") += v;
+                } else {
+                    idx.push(j);
+                    val.push(v);
+                    last = j;
+                }
+            }
+            ptr.push(idx.len());
+        }
+        Csr { n, ptr, idx, val }
+    }
+
+    /// The paper's `s` per free vertex: `(dt² Σk + dt Σc) / m`.
+    pub fn s_values(&self, dt: f64) -> Vec<f64> {
+        let mut s = vec![0.0; self.mass.len()];
+        for &(a, b, k, c) in &self.pairs {
+            let w = dt * dt * k + dt * c;
+            s[a as usize] += w;
+            s[b as usize] += w;
+        }
+        for &(a, k, c) in &self.anchors {
+            s[a as usize] += dt * dt * k + dt * c;
+        }
+        for (si, m) in s.iter_mut().zip(&self.mass) {
+            *si /= m;
+        }
+        s
+    }
+}
+
+/// A precomputed filter: `apply` solves (or approximates) `S Δv = b` without allocating.
+pub(crate) enum Filter {
+    Exact {
+        llt: faer::sparse::linalg::solvers::Llt<u32, f64>,
+        rhs: Mat<f64>,
+    },
+    Neighbour {
+        p: Csr,
+        rings: u32,
+    },
+}
+
+impl Filter {
+    pub fn precompute(system: &System, dt: f64, kind: FilterKind) -> Result<Self, FilterError> {
+        let s = system.matrix(dt);
+        match kind {
+            FilterKind::Exact => {
+                let a = s.to_faer()?;
+                let llt = a
+                    .sp_cholesky(Side::Lower)
+                    .map_err(|_| FilterError::NotPositiveDefinite)?;
+                Ok(Filter::Exact {
+                    llt,
+                    rhs: Mat::zeros(s.n, 3),
+                })
+            }
+            FilterKind::Neighbour { rings } => Ok(Filter::Neighbour {
+                p: neumann(&s, rings.max(1))?,
+                rings: rings.max(1),
+            }),
+        }
+    }
+
+    pub fn kind(&self) -> FilterKind {
+        match self {
+            Filter::Exact { .. } => FilterKind::Exact,
+            Filter::Neighbour { rings, .. } => FilterKind::Neighbour { rings: *rings },
+        }
+    }
+
+    /// `out = S⁻¹ b` (exact) or its approximation.
+    pub fn apply(&mut self, b: &[DVec3], out: &mut [DVec3]) {
+        match self {
+            Filter::Exact { llt, rhs } => {
+                for (i, v) in b.iter().enumerate() {
+                    rhs[(i, 0)] = v.x;
+                    rhs[(i, 1)] = v.y;
+                    rhs[(i, 2)] = v.z;
+                }
+                llt.solve_in_place(rhs.as_mut());
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = DVec3::new(rhs[(i, 0)], rhs[(i, 1)], rhs[(i, 2)]);
+                }
+            }
+            Filter::Neighbour { p, .. } => p.mul_vec3(b, out),
+        }
+    }
+}
+
+/// `D^{-1/2} (I + B + … + B^r) D^{-1/2}` with the rigid-motion correction (module docs).
+fn neumann(s: &Csr, rings: u32) -> Result<Csr, FilterError> {
+    let n = s.n;
+    let mut dinv_sqrt = vec![0.0; n];
+    for (i, d) in dinv_sqrt.iter_mut().enumerate() {
+        let diag = (s.ptr[i]..s.ptr[i + 1])
+            .find(|&k| s.idx[k] as usize == i)
+            .map(|k| s.val[k])
+            .unwrap_or(0.0);
+        if diag <= 0.0 || !diag.is_finite() {
+            return Err(FilterError::NotPositiveDefinite);
+        }
+        *d = 1.0 / diag.sqrt();
+    }
+    // B = I - D^{-1/2} S D^{-1/2}: the off-diagonal part, negated and scaled.
+    let mut b = Csr {
+        n,
+        ptr: vec![0],
+        idx: Vec::new(),
+        val: Vec::new(),
+    };
+    for i in 0..n {
+        for k in s.ptr[i]..s.ptr[i + 1] {
+            let j = s.idx[k] as usize;
+            if j != i {
+                b.idx.push(j as u32);
+                b.val.push(-s.val[k] * dinv_sqrt[i] * dinv_sqrt[j]);
+            }
+        }
+        b.ptr.push(b.idx.len());
+    }
+    let bf = b.to_faer()?;
+    // Sum of powers by Horner: T = I + B (I + B (…)).
+    let mut total = identity(n);
+    let mut power = identity(n).to_faer()?;
+    for _ in 0..rings {
+        power = sparse_sparse_matmul(bf.as_ref(), power.as_ref(), 1.0, Par::Seq)
+            .map_err(|e| FilterError::Faer(format!("{e:?}")))?;
+        total = add(&total, &Csr::from_faer(&power));
+    }
+    // Scale by D^{-1/2} on both sides.
+    for i in 0..n {
+        for k in total.ptr[i]..total.ptr[i + 1] {
+            let j = total.idx[k] as usize;
+            total.val[k] *= dinv_sqrt[i] * dinv_sqrt[j];
+        }
+    }
+    // Rigid-motion correction: make P (S 1) = 1.
+    let ones = vec![DVec3::ONE; n];
+    let mut s1 = vec![DVec3::ZERO; n];
+    s.mul_vec3(&ones, &mut s1);
+    let mut ps1 = vec![DVec3::ZERO; n];
+    total.mul_vec3(&s1, &mut ps1);
+    for i in 0..n {
+        let delta = (1.0 - ps1[i].x) / s1[i].x;
+        if let Some(k) = (total.ptr[i]..total.ptr[i + 1]).find(|&k| total.idx[k] as usize == i) {
+            total.val[k] += delta;
+        }
+    }
+    Ok(total)
+}
+
+fn identity(n: usize) -> Csr {
+    Csr {
+        n,
+        ptr: (0..=n).collect(),
+        idx: (0..n as u32).collect(),
+        val: vec![1.0; n],
+    }
+}
+
+/// Sum of two CSR matrices of the same size (rows merged).
+fn add(a: &Csr, b: &Csr) -> Csr {
+    let mut out = Csr {
+        n: a.n,
+        ptr: vec![0],
+        idx: Vec::with_capacity(a.idx.len() + b.idx.len()),
+        val: Vec::with_capacity(a.idx.len() + b.idx.len()),
+    };
+    let mut row: Vec<(u32, f64)> = Vec::new();
+    for i in 0..a.n {
+        row.clear();
+        row.extend((a.ptr[i]..a.ptr[i + 1]).map(|k| (a.idx[k], a.val[k])));
+        row.extend((b.ptr[i]..b.ptr[i + 1]).map(|k| (b.idx[k], b.val[k])));
+        row.sort_unstable_by_key(|e| e.0);
+        let mut last = u32::MAX;
+        for &(j, v) in &row {
+            if j == last {
+                *out.val.last_mut().expect("pushed") += v;
+            } else {
+                out.idx.push(j);
+                out.val.push(v);
+                last = j;
+            }
+        }
+        out.ptr.push(out.idx.len());
+    }
+    out
+}
+
+/// The dense exact filter `W = S⁻¹ M` (row `i`: weights of every vertex's force on vertex
+/// `i`), for analysis on small meshes (Table II). `O(N²)` memory.
+pub(crate) fn dense_weights(system: &System, dt: f64) -> Result<Vec<Vec<f64>>, FilterError> {
+    let s = system.matrix(dt).to_faer()?;
+    let llt = s
+        .sp_cholesky(Side::Lower)
+        .map_err(|_| FilterError::NotPositiveDefinite)?;
+    let n = system.mass.len();
+    // Columns of S⁻¹ M: solve S x = M e_j.
+    let mut rhs = Mat::<f64>::zeros(n, n);
+    for j in 0..n {
+        rhs[(j, j)] = system.mass[j];
+    }
+    llt.solve_in_place(rhs.as_mut());
+    Ok((0..n)
+        .map(|i| (0..n).map(|j| rhs[(i, j)]).collect())
+        .collect())
+}
+
+/// Largest truncation-error bound `(s/(1+s))^(rings+1)` over the vertices.
+pub(crate) fn neighbour_error_bound(s_values: &[f64], rings: u32) -> f64 {
+    s_values
+        .iter()
+        .map(|s| (s / (1.0 + s)).powi(rings as i32 + 1))
+        .fold(0.0, f64::max)
+}

@@ -1,0 +1,413 @@
+//! The soft-surface model against analytic and independent references: a chain's static
+//! deflection, the exact filter against a dense inverse, symmetry and row sums of `W`,
+//! stability beyond the explicit limit, return to home, conservation of momentum, bad input.
+
+#![allow(clippy::needless_range_loop)] // matrix checks read best with indices
+
+use nalgebra::DMatrix;
+use rapier_touch::prelude::*;
+
+/// A small triangulated grid plate in the xz-plane (own generator: independent of the crate's
+/// meshing code).
+fn grid(nx: u32, nz: u32, size: f32) -> (Vec<Vector>, Vec<[u32; 3]>) {
+    let mut v = Vec::new();
+    for i in 0..=nx {
+        for j in 0..=nz {
+            v.push(Vector::new(
+                size * i as f32 / nx as f32,
+                0.0,
+                size * j as f32 / nz as f32,
+            ));
+        }
+    }
+    let mut t = Vec::new();
+    for i in 0..nx {
+        for j in 0..nz {
+            let a = i * (nz + 1) + j;
+            let b = a + nz + 1;
+            t.push([a, a + 1, b]);
+            t.push([b, a + 1, b + 1]);
+        }
+    }
+    (v, t)
+}
+
+/// A chain of `n` springs pinned at vertex 0, pulled at vertex `n` by `f`: each spring
+/// carries `f`, so vertex `i` moves `i f / k` (linear model, any direction).
+#[test]
+fn chain_static_deflection_matches_the_analytic_solution() {
+    let n = 10u32;
+    let k = 50.0;
+    let f = Vector::new(0.3, -2.0, 0.5);
+    let verts: Vec<Vector> = (0..=n)
+        .map(|i| Vector::new(i as f32 * 0.1, 0.0, 0.0))
+        .collect();
+    let edges: Vec<[u32; 2]> = (0..n).map(|i| [i, i + 1]).collect();
+    for integrator in [Integrator::EXACT, Integrator::BARAFF_WITKIN] {
+        let mut s = MassSpringSurfaceBuilder::network(verts.clone(), edges.clone())
+            .stiffness(k)
+            .damping(5.0)
+            .mass(MassDistribution::PerVertex(0.05))
+            .pinned([0])
+            .dt(0.01)
+            .integrator(integrator)
+            .build()
+            .unwrap();
+        s.set_force(n, f).unwrap();
+        for _ in 0..5000 {
+            s.step();
+        }
+        for i in 0..=n {
+            let expected = f * (i as f32 / k);
+            let err = (s.displacement(i) - expected).length();
+            assert!(
+                err <= 1e-5 * (f.length() * n as f32 / k),
+                "{integrator:?} vertex {i}: {err}"
+            );
+        }
+    }
+}
+
+/// The dense matrix `A = I - K dt²/m - C dt/m` of the paper, assembled here from the edges.
+fn paper_matrix(s: &MassSpringSurface, k: f64, c: f64, dt: f64, free: &[u32]) -> DMatrix<f64> {
+    let n = free.len();
+    let mut index = vec![usize::MAX; s.num_vertices()];
+    for (fi, &v) in free.iter().enumerate() {
+        index[v as usize] = fi;
+    }
+    let mut a = DMatrix::<f64>::identity(n, n);
+    let w = dt * dt * k + dt * c;
+    for &[p, q] in s.edges() {
+        let (ip, iq) = (index[p as usize], index[q as usize]);
+        let (mp, mq) = (s.mass(p) as f64, s.mass(q) as f64);
+        if ip != usize::MAX {
+            a[(ip, ip)] += w / mp;
+            if iq != usize::MAX {
+                a[(ip, iq)] -= w / mp;
+            }
+        }
+        if iq != usize::MAX {
+            a[(iq, iq)] += w / mq;
+            if ip != usize::MAX {
+                a[(iq, ip)] -= w / mq;
+            }
+        }
+    }
+    a
+}
+
+#[test]
+fn exact_filter_equals_the_dense_inverse() {
+    let (v, t) = grid(4, 3, 1.0);
+    let (k, c, dt) = (300.0, 2.0, 1.0 / 30.0);
+    let s = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(k)
+        .damping(c)
+        .mass(MassDistribution::AreaDensity(2.0)) // non-uniform masses
+        .pinned([0, 1])
+        .dt(dt)
+        .build()
+        .unwrap();
+    let (free, w) = s.dense_filter().unwrap();
+    let inv = paper_matrix(&s, k as f64, c as f64, dt as f64, &free)
+        .try_inverse()
+        .unwrap();
+    for i in 0..free.len() {
+        for j in 0..free.len() {
+            // The masses reach this test through f32 accessors: agreement to f32 precision.
+            assert!(
+                (w[i][j] - inv[(i, j)]).abs() <= 1e-6,
+                "W[{i}][{j}] = {} vs {}",
+                w[i][j],
+                inv[(i, j)]
+            );
+        }
+    }
+}
+
+#[test]
+fn w_is_symmetric_with_unit_row_sums_for_uniform_masses() {
+    let (v, t) = grid(5, 5, 1.0);
+    let s = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(1000.0)
+        .damping(3.0)
+        .mass(MassDistribution::PerVertex(0.02))
+        .dt(1.0 / 60.0)
+        .build()
+        .unwrap();
+    let (free, w) = s.dense_filter().unwrap();
+    assert_eq!(free.len(), 36);
+    for i in 0..free.len() {
+        let row: f64 = w[i].iter().sum();
+        assert!((row - 1.0).abs() <= 1e-12, "row {i} sums to {row}");
+        for j in 0..i {
+            assert!((w[i][j] - w[j][i]).abs() <= 1e-12);
+        }
+    }
+}
+
+/// One filtered step against the same step done here with the dense inverse (eq. 8).
+#[test]
+fn one_exact_step_is_equation_8() {
+    let (v, t) = grid(3, 3, 1.0);
+    let (k, c, dt) = (500.0, 1.0, 0.02);
+    let mut s = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(k)
+        .damping(c)
+        .mass(MassDistribution::PerVertex(0.1))
+        .pinned([0])
+        .dt(dt)
+        .build()
+        .unwrap();
+    s.set_force(15, Vector::new(0.0, -3.0, 1.0)).unwrap();
+    s.step(); // a state with velocities
+    let (free, _) = s.dense_filter().unwrap();
+    let a = paper_matrix(&s, k as f64, c as f64, dt as f64, &free);
+    // Reference: Δv = A⁻¹ (dt/m)(F + dt K v), F = ext + springs + dampers (linear model).
+    let n = s.num_vertices();
+    let mut f = vec![[0.0f64; 3]; n];
+    let mut kv = vec![[0.0f64; 3]; n];
+    f[15] = [0.0, -3.0, 1.0];
+    for &[p, q] in s.edges() {
+        let du = s.displacement(q) - s.displacement(p);
+        let dv = s.velocity(q) - s.velocity(p);
+        for d in 0..3 {
+            let fe = k as f64 * du[d] as f64 + c as f64 * dv[d] as f64;
+            f[p as usize][d] += fe;
+            f[q as usize][d] -= fe;
+            let kve = k as f64 * dv[d] as f64;
+            kv[p as usize][d] += kve;
+            kv[q as usize][d] -= kve;
+        }
+    }
+    let inv = a.try_inverse().unwrap();
+    let before: Vec<Vector> = (0..n as u32).map(|i| s.velocity(i)).collect();
+    s.step();
+    for d in 0..3 {
+        let rhs = nalgebra::DVector::from_iterator(
+            free.len(),
+            free.iter().map(|&v| {
+                let i = v as usize;
+                (dt as f64 / s.mass(v) as f64) * (f[i][d] + dt as f64 * kv[i][d])
+            }),
+        );
+        let dv = &inv * rhs;
+        for (fi, &v) in free.iter().enumerate() {
+            let got = (s.velocity(v) - before[v as usize])[d] as f64;
+            assert!(
+                (got - dv[fi]).abs() <= 1e-5,
+                "vertex {v} axis {d}: {got} vs {}",
+                dv[fi]
+            );
+        }
+    }
+}
+
+fn stiff_plate(integrator: Integrator) -> MassSpringSurface {
+    let (v, t) = grid(6, 6, 1.0);
+    let mut s = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(2.0e4)
+        .damping(0.5)
+        .mass(MassDistribution::PerVertex(0.01))
+        .pinned([0, 6])
+        .dt(1.0 / 60.0) // k dt²/m ≈ 556, far beyond the explicit limit (about 4/8)
+        .integrator(integrator)
+        .build()
+        .unwrap();
+    s.set_force(48, Vector::new(0.0, -5.0, 0.0)).unwrap();
+    s
+}
+
+#[test]
+fn explicit_diverges_where_the_filtered_integrators_stay_bounded() {
+    let mut explicit = stiff_plate(Integrator::ExplicitEuler);
+    for _ in 0..200 {
+        explicit.step();
+    }
+    assert!(!explicit.is_finite() || explicit.max_displacement() > 1e3);
+    for integrator in [
+        Integrator::EXACT,
+        Integrator::NEIGHBOUR,
+        Integrator::BARAFF_WITKIN,
+    ] {
+        let mut s = stiff_plate(integrator);
+        for _ in 0..600 {
+            s.step();
+            assert!(
+                s.is_finite() && s.max_displacement() < 1.0,
+                "{integrator:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn released_surface_returns_home() {
+    for integrator in [
+        Integrator::EXACT,
+        Integrator::NEIGHBOUR,
+        Integrator::BARAFF_WITKIN,
+    ] {
+        let (v, t) = grid(6, 6, 1.0);
+        let mut s = MassSpringSurfaceBuilder::new(v, t)
+            .stiffness(200.0)
+            .damping(0.5)
+            .mass(MassDistribution::PerVertex(0.02))
+            .pinned([0, 6, 42, 48])
+            .dt(1.0 / 120.0)
+            .integrator(integrator)
+            .build()
+            .unwrap();
+        let h = s.home(24);
+        s.set_state(24, h + Vector::new(0.0, -0.1, 0.0), Vector::ZERO)
+            .unwrap();
+        let d0 = s.max_displacement();
+        for _ in 0..2400 {
+            s.step();
+        }
+        assert!(
+            s.max_displacement() < 1e-3 * d0,
+            "{integrator:?}: {}",
+            s.max_displacement()
+        );
+    }
+}
+
+#[test]
+fn momentum_is_conserved_without_external_forces_or_pins() {
+    for integrator in [
+        Integrator::ExplicitEuler,
+        Integrator::EXACT,
+        Integrator::NEIGHBOUR,
+        Integrator::Filtered(FilterKind::Neighbour { rings: 3 }),
+        Integrator::BARAFF_WITKIN,
+    ] {
+        let (v, t) = grid(4, 4, 1.0);
+        let mut s = MassSpringSurfaceBuilder::new(v, t)
+            .stiffness(50.0)
+            .damping(0.2)
+            .mass(MassDistribution::AreaDensity(3.0))
+            .dt(1.0 / 240.0)
+            .integrator(integrator)
+            .neighbour_max_error(1.0)
+            .build()
+            .unwrap();
+        for i in 0..s.num_vertices() as u32 {
+            let f = i as f32;
+            let h = s.home(i);
+            s.set_state(i, h, Vector::new(f.sin(), (2.0 * f).cos(), 0.3 * f.sin()))
+                .unwrap();
+        }
+        let p0 = s.momentum();
+        for _ in 0..500 {
+            s.step();
+        }
+        let dp = (s.momentum() - p0).length();
+        assert!(
+            dp <= 1e-4 * p0.length().max(1.0),
+            "{integrator:?}: Δp = {dp}"
+        );
+    }
+}
+
+#[test]
+fn neighbour_filter_falls_back_to_exact_when_s_is_large() {
+    let s = stiff_plate(Integrator::NEIGHBOUR);
+    assert!(s.s_values().iter().cloned().fold(0.0, f32::max) > 100.0);
+    assert!(s.filter_fallback());
+    let (v, t) = grid(4, 4, 1.0);
+    let soft = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(1.0)
+        .damping(0.0)
+        .mass(MassDistribution::PerVertex(1.0))
+        .dt(0.01)
+        .integrator(Integrator::NEIGHBOUR)
+        .build()
+        .unwrap();
+    assert!(!soft.filter_fallback());
+    assert!(soft.neighbour_error_bound(1) < 1e-6);
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let (v, t) = grid(2, 2, 1.0);
+    let b = || MassSpringSurfaceBuilder::new(v.clone(), t.clone());
+    assert_eq!(
+        MassSpringSurfaceBuilder::new(vec![], vec![])
+            .build()
+            .unwrap_err(),
+        SurfaceError::EmptyMesh
+    );
+    assert!(matches!(
+        b().mass(MassDistribution::PerVertex(0.0)).build(),
+        Err(SurfaceError::NonPositiveMass(_))
+    ));
+    assert!(matches!(
+        b().mass(MassDistribution::Total(-1.0)).build(),
+        Err(SurfaceError::NonPositiveMass(_))
+    ));
+    assert!(matches!(
+        b().stiffness(0.0).build(),
+        Err(SurfaceError::InvalidSpring { .. })
+    ));
+    assert!(matches!(
+        b().damping(-1.0).build(),
+        Err(SurfaceError::InvalidSpring { .. })
+    ));
+    assert!(matches!(
+        b().dt(0.0).build(),
+        Err(SurfaceError::InvalidTimeStep(_))
+    ));
+    assert!(matches!(
+        b().dt(f32::NAN).build(),
+        Err(SurfaceError::InvalidTimeStep(_))
+    ));
+    assert!(matches!(
+        b().pinned([99]).build(),
+        Err(SurfaceError::VertexOutOfRange { .. })
+    ));
+    assert!(matches!(
+        b().edge_stiffness(0, 8, 1.0).build(),
+        Err(SurfaceError::NotAnEdge(0, 8))
+    ));
+    let mut nan = v.clone();
+    nan[3].y = f32::NAN;
+    assert_eq!(
+        MassSpringSurfaceBuilder::new(nan, t.clone())
+            .build()
+            .unwrap_err(),
+        SurfaceError::NonFiniteVertex(3)
+    );
+    assert!(matches!(
+        MassSpringSurfaceBuilder::new(v.clone(), vec![[0, 0, 1], [0, 1, 2]]).build(),
+        Err(SurfaceError::AllTrianglesDegenerate(2))
+    ));
+    assert!(matches!(
+        MassSpringSurfaceBuilder::network(v.clone(), vec![[0, 1]])
+            .mass(MassDistribution::AreaDensity(1.0))
+            .build(),
+        Err(SurfaceError::NonPositiveMass(_))
+    ));
+    // Degenerate triangles dropped and reported; an isolated vertex kept and free.
+    let mut v2 = v.clone();
+    v2.push(Vector::new(5.0, 5.0, 5.0));
+    let mut t2 = t.clone();
+    t2.push([0, 0, 3]);
+    let mut s = MassSpringSurfaceBuilder::new(v2, t2)
+        .gravity(Vector::new(0.0, -9.81, 0.0))
+        .build()
+        .unwrap();
+    assert_eq!(s.dropped_triangles(), &[t.len() as u32]);
+    assert_eq!(s.isolated_vertices(), &[9]);
+    assert_eq!(
+        s.set_force(0, Vector::new(f32::NAN, 0.0, 0.0)),
+        Err(SurfaceError::NonFiniteForce)
+    );
+    assert!(s.set_force(100, Vector::X).is_err());
+    assert!(s.set_dt(-1.0).is_err());
+    for _ in 0..10 {
+        s.step();
+    }
+    assert!(s.is_finite());
+    assert!(s.position(9).y < 5.0, "the isolated vertex falls freely");
+}
