@@ -450,10 +450,12 @@ impl MassSpringSurfaceBuilder {
             filter: None,
             fallback: false,
             force: vec![DVec3::ZERO; n],
+            disp: Vec::with_capacity(n),
             rhs: Vec::new(),
             dv: Vec::new(),
             cg: CgScratch::default(),
             last_cg_iterations: 0,
+            diverged: false,
         };
         s.rebuild_free();
         s.ensure_filter()?;
@@ -509,10 +511,12 @@ pub struct MassSpringSurface {
     filter: Option<Filter>,
     fallback: bool,
     force: Vec<DVec3>,
+    disp: Vec<[DVec3; 2]>,
     rhs: Vec<DVec3>,
     dv: Vec<DVec3>,
     cg: CgScratch,
     last_cg_iterations: u32,
+    diverged: bool,
 }
 
 const NOT_FREE: u32 = u32::MAX;
@@ -828,9 +832,15 @@ impl MassSpringSurface {
     }
 
     fn compute_forces(&mut self) {
+        self.accumulate_forces(0.0);
+    }
+
+    /// `force = ext + m g + schedules + springs + dampers + kv_dt K v` in one pass over the
+    /// edges (`kv_dt = dt` adds the filter's `dt K vⁿ` term, with the paper's constant `K`).
+    fn accumulate_forces(&mut self, kv_dt: f64) {
         let t = self.time;
-        for (i, f) in self.force.iter_mut().enumerate() {
-            *f = self.ext[i] + self.gravity * self.mass[i];
+        for ((f, e), m) in self.force.iter_mut().zip(&self.ext).zip(&self.mass) {
+            *f = *e + self.gravity * *m;
         }
         for (verts, profile) in &self.schedules {
             let f = profile.at(t);
@@ -838,11 +848,45 @@ impl MassSpringSurface {
                 self.force[v as usize] += f;
             }
         }
-        for e in 0..self.edges.len() {
-            let f = self.edge_force(e);
-            let [a, b] = self.edges[e];
-            self.force[a as usize] += f;
-            self.force[b as usize] -= f;
+        let edges = self.edges.iter().zip(self.k.iter().zip(&self.c));
+        match self.model {
+            SpringModel::Linear => {
+                // Displacement and velocity side by side once per vertex, then one read per
+                // edge end.
+                self.disp.clear();
+                self.disp.extend(
+                    self.pos
+                        .iter()
+                        .zip(&self.home)
+                        .zip(&self.vel)
+                        .map(|((p, h), v)| [*p - *h, *v]),
+                );
+                let state = &self.disp;
+                let force = &mut self.force;
+                for (&[a, b], (&k, &c)) in edges {
+                    let (a, b) = (a as usize, b as usize);
+                    let [ua, va] = state[a];
+                    let [ub, vb] = state[b];
+                    let f = (ub - ua) * k + (vb - va) * (c + kv_dt * k);
+                    force[a] += f;
+                    force[b] -= f;
+                }
+            }
+            SpringModel::Length => {
+                for ((&[a, b], (&k, &c)), &rest) in edges.zip(&self.rest) {
+                    let (a, b) = (a as usize, b as usize);
+                    let d = self.pos[b] - self.pos[a];
+                    let l = d.length();
+                    let spring = if l > 0.0 {
+                        d * (k * (l - rest) / l)
+                    } else {
+                        DVec3::ZERO
+                    };
+                    let f = spring + (self.vel[b] - self.vel[a]) * (c + kv_dt * k);
+                    self.force[a] += f;
+                    self.force[b] -= f;
+                }
+            }
         }
     }
 
@@ -910,6 +954,10 @@ impl MassSpringSurface {
             / n as f64)
             .sqrt() as Real
     }
+    /// `true` once a step produced a non-finite state (the surface then stops stepping).
+    pub fn diverged(&self) -> bool {
+        self.diverged
+    }
     /// `true` if every position and velocity is finite.
     pub fn is_finite(&self) -> bool {
         self.pos.iter().all(|p| p.is_finite()) && self.vel.iter().all(|v| v.is_finite())
@@ -920,20 +968,24 @@ impl MassSpringSurface {
     /// Advances the surface by one time step with its integrator.
     ///
     /// A state that stops being finite (explicit Euler beyond its stability limit) is not
-    /// advanced further: check [`MassSpringSurface::is_finite`].
+    /// advanced further: check [`MassSpringSurface::is_finite`] or
+    /// [`MassSpringSurface::diverged`].
     pub fn step(&mut self) {
-        if !self.is_finite() {
+        if self.diverged {
             return;
         }
-        self.compute_forces();
         match self.integrator {
             Integrator::ExplicitEuler => {
+                self.compute_forces();
                 let dt = self.dt;
+                let mut probe = 0.0;
                 for &v in &self.free {
                     let i = v as usize;
                     self.vel[i] += self.force[i] * (dt / self.mass[i]);
                     self.pos[i] += self.vel[i] * dt;
+                    probe += self.pos[i].element_sum();
                 }
+                self.check_probe(probe);
             }
             Integrator::Filtered(_) => {
                 if self.filter.is_none() && self.ensure_filter().is_err() {
@@ -944,40 +996,56 @@ impl MassSpringSurface {
             Integrator::BaraffWitkin {
                 max_iterations,
                 tolerance,
-            } => self.baraff_witkin_step(max_iterations, tolerance as f64),
+            } => {
+                self.compute_forces();
+                self.baraff_witkin_step(max_iterations, tolerance as f64)
+            }
         }
         self.time += self.dt;
+    }
+
+    /// NaN and infinity propagate into a sum of the new positions (every velocity went into
+    /// them): one check per step instead of a scan.
+    fn check_probe(&mut self, probe: f64) {
+        if !probe.is_finite() {
+            self.diverged = true;
+        }
     }
 
     /// Eq. (8): `Δv = W M⁻¹ dt (Fⁿ + dt K vⁿ)`, i.e. `S Δv = dt (Fⁿ + dt K vⁿ)`.
     fn filtered_step(&mut self) {
         let dt = self.dt;
-        for (fi, &v) in self.free.iter().enumerate() {
-            self.rhs[fi] = self.force[v as usize];
-        }
-        // + dt K v: K = -Lk (the paper's constant stiffness matrix).
-        for (e, &[a, b]) in self.edges.iter().enumerate() {
-            let kv = self.k[e] * dt * (self.vel[b as usize] - self.vel[a as usize]);
-            let (fa, fb) = (self.free_index[a as usize], self.free_index[b as usize]);
-            if fa != NOT_FREE {
-                self.rhs[fa as usize] += kv;
-            }
-            if fb != NOT_FREE {
-                self.rhs[fb as usize] -= kv;
-            }
-        }
-        for r in &mut self.rhs {
-            *r *= dt;
+        self.accumulate_forces(dt);
+        for (r, &v) in self.rhs.iter_mut().zip(&self.free) {
+            *r = self.force[v as usize] * dt;
         }
         let Some(filter) = self.filter.as_mut() else {
             return;
         };
         filter.apply(&self.rhs, &mut self.dv);
-        for (fi, &v) in self.free.iter().enumerate() {
-            let i = v as usize;
-            self.vel[i] += self.dv[fi];
-            self.pos[i] += self.vel[i] * dt;
+        if self.free.len() == self.home.len()
+            && matches!(filter.kind(), FilterKind::Neighbour { .. })
+        {
+            // The truncated filter drifts the rigid mode: add the mean velocity change that
+            // makes the momentum change equal the applied impulse (module docs of `filter`).
+            let (mut impulse, mut got, mut total) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+            for ((b, dv), &v) in self.rhs.iter().zip(&self.dv).zip(&self.free) {
+                let m = self.mass[v as usize];
+                impulse += *b;
+                got += *dv * m;
+                total += m;
+            }
+            let gamma = (impulse - got) / total;
+            self.dv.iter_mut().for_each(|dv| *dv += gamma);
         }
+        let mut probe = 0.0;
+        for (dv, &v) in self.dv.iter().zip(&self.free) {
+            let i = v as usize;
+            self.vel[i] += *dv;
+            self.pos[i] += self.vel[i] * dt;
+            probe += self.pos[i].element_sum();
+        }
+        self.check_probe(probe);
     }
 
     /// Baraff-Witkin: `(M - dt² J - dt C) Δv = dt (Fⁿ + dt J vⁿ)` with the exact spring
@@ -1085,11 +1153,14 @@ impl MassSpringSurface {
             it += 1;
         }
         self.last_cg_iterations = it;
+        let mut probe = 0.0;
         for (fi, &v) in self.free.iter().enumerate() {
             let i = v as usize;
             self.vel[i] += x[fi];
             self.pos[i] += self.vel[i] * dt;
+            probe += self.pos[i].element_sum();
         }
+        self.check_probe(probe);
         // x stays as the next warm start.
         self.dv = x;
         self.rhs = rhs;

@@ -411,3 +411,45 @@ fn bad_input_is_an_error() {
     assert!(s.is_finite());
     assert!(s.position(9).y < 5.0, "the isolated vertex falls freely");
 }
+
+/// The paper's neighbour filter (no fallback) stays stable well past s = 1 (s ≈ 5 here), where
+/// explicit Euler diverges: the crate's consistency correction is kept off such rows because
+/// on every row it made this filter diverge from s ≈ 2.
+#[test]
+fn neighbour_filter_without_fallback_is_stable_at_s_5() {
+    let make = |integrator| {
+        let (v, t) = grid(8, 8, 1.0);
+        let mut s = MassSpringSurfaceBuilder::new(v, t)
+            .stiffness(150.0)
+            .damping(0.05)
+            .mass(MassDistribution::PerVertex(0.01))
+            .pinned([0, 8, 72, 80])
+            .dt(1.0 / 60.0)
+            .integrator(integrator)
+            .neighbour_max_error(f32::INFINITY)
+            .build()
+            .unwrap();
+        s.set_force(40, Vector::new(0.0, -1.0, 0.0)).unwrap();
+        s
+    };
+    let mut nb = make(Integrator::NEIGHBOUR);
+    let mean_s: f32 = nb.s_values().iter().sum::<f32>() / 81.0;
+    assert!(mean_s > 3.0, "mean s = {mean_s}");
+    assert!(!nb.filter_fallback());
+    let mut exact = make(Integrator::EXACT);
+    let mut explicit = make(Integrator::ExplicitEuler);
+    for _ in 0..1200 {
+        nb.step();
+        exact.step();
+        explicit.step();
+    }
+    assert!(explicit.diverged() || explicit.max_displacement() > 10.0);
+    assert!(nb.is_finite());
+    // Same static equilibrium after 20 s.
+    assert!(
+        nb.rms_difference(&exact) <= 1e-3 * exact.max_displacement(),
+        "rms {} vs max {}",
+        nb.rms_difference(&exact),
+        exact.max_displacement()
+    );
+}
