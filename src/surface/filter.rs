@@ -86,10 +86,11 @@ impl Csr {
     /// `y = A x` over `Vec3`s (one read of the matrix).
     #[inline]
     pub fn mul_vec3(&self, x: &[DVec3], y: &mut [DVec3]) {
-        for (i, yi) in y.iter_mut().enumerate().take(self.n) {
+        for (yi, w) in y.iter_mut().zip(self.ptr.windows(2)) {
+            let (idx, val) = (&self.idx[w[0]..w[1]], &self.val[w[0]..w[1]]);
             let mut acc = DVec3::ZERO;
-            for k in self.ptr[i]..self.ptr[i + 1] {
-                acc += x[self.idx[k] as usize] * self.val[k];
+            for (&j, &a) in idx.iter().zip(val) {
+                acc += x[j as usize] * a;
             }
             *yi = acc;
         }

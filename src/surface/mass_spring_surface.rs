@@ -229,6 +229,10 @@ impl MassSpringSurfaceBuilder {
             neighbour_max_error: 0.05,
         }
     }
+    /// A surface on a mesh from [`super::meshing`] (planar meshing, OBJ files, generators).
+    pub fn from_mesh(mesh: &super::meshing::SurfaceMesh) -> Self {
+        Self::new(mesh.vertices.clone(), mesh.triangles.clone())
+    }
     /// A spring network with no triangles (a chain, a lattice): the same model on explicit
     /// edges. [`MassDistribution::AreaDensity`] needs triangles and is an error here.
     pub fn network(vertices: Vec<Vector>, edges: Vec<[u32; 2]>) -> Self {
