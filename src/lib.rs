@@ -32,6 +32,7 @@
 //! Lower layers never name a rapier handle or set:
 //! - [`geometry`]: pure geometry, the paper's eq. (1)-(3) (no pipeline).
 //! - [`surface`]: the soft-surface model, the paper's eq. (3)-(10) (no pipeline).
+//! - [`coupling`]: soft surfaces on rapier bodies, pressed by rigid tools.
 //! - [`hooks`]: the rapier integration: [`hooks::TouchPipeline`] steps a `PhysicsWorld` with
 //!   [`hooks::TouchHooks`], a step guard against tunneling, tool proxies and contact reports.
 //!
@@ -48,6 +49,7 @@
 pub use parry3d;
 pub use rapier3d;
 
+pub mod coupling;
 pub mod geometry;
 pub mod hooks;
 pub mod math;
@@ -56,6 +58,9 @@ pub mod surface;
 
 /// Everything a user needs, in one import.
 pub mod prelude {
+    pub use crate::coupling::{
+        AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,
+    };
     pub use crate::geometry::{
         safe_step_length, ContactConfiguration, ContactKind, ContactPatch, ContactPoint,
         DirectionSource, Feature, ReconstructionError, ReconstructionOptions, Reconstructor,

@@ -349,6 +349,7 @@ impl MassSpringSurfaceBuilder {
         let mut edge_map: HashMap<[u32; 2], usize> = HashMap::new();
         let mut area = vec![0.0f64; n];
         let mut dropped = Vec::new();
+        let mut kept_triangles = Vec::with_capacity(self.triangles.len());
         for (ti, t) in self.triangles.iter().enumerate() {
             let [a, b, c] = t.map(|i| home[i as usize]);
             let ar = 0.5 * (b - a).cross(c - a).length();
@@ -357,6 +358,7 @@ impl MassSpringSurfaceBuilder {
                 dropped.push(ti as u32);
                 continue;
             }
+            kept_triangles.push(*t);
             for &v in t {
                 area[v as usize] += ar / 3.0;
             }
@@ -448,6 +450,7 @@ impl MassSpringSurfaceBuilder {
             time: 0.0,
             neighbour_max_error: self.neighbour_max_error as f64,
             dropped,
+            triangles: kept_triangles,
             isolated,
             free: Vec::new(),
             free_index: Vec::new(),
@@ -460,7 +463,12 @@ impl MassSpringSurfaceBuilder {
             cg: CgScratch::default(),
             last_cg_iterations: 0,
             diverged: false,
+            vertex_edge_ptr: Vec::new(),
+            vertex_edges: Vec::new(),
+            held: vec![false; n],
+            any_held: false,
         };
+        s.build_vertex_edges();
         s.rebuild_free();
         s.ensure_filter()?;
         Ok(s)
@@ -509,6 +517,7 @@ pub struct MassSpringSurface {
     time: f64,
     neighbour_max_error: f64,
     dropped: Vec<u32>,
+    triangles: Vec<[u32; 3]>,
     isolated: Vec<u32>,
     free: Vec<u32>,
     free_index: Vec<u32>,
@@ -521,11 +530,37 @@ pub struct MassSpringSurface {
     cg: CgScratch,
     last_cg_iterations: u32,
     diverged: bool,
+    vertex_edge_ptr: Vec<usize>,
+    vertex_edges: Vec<u32>,
+    held: Vec<bool>,
+    any_held: bool,
 }
 
 const NOT_FREE: u32 = u32::MAX;
 
 impl MassSpringSurface {
+    fn build_vertex_edges(&mut self) {
+        let n = self.home.len();
+        let mut ptr = vec![0usize; n + 1];
+        for e in &self.edges {
+            ptr[e[0] as usize + 1] += 1;
+            ptr[e[1] as usize + 1] += 1;
+        }
+        for i in 0..n {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut fill = ptr.clone();
+        let mut list = vec![0u32; ptr[n]];
+        for (ei, e) in self.edges.iter().enumerate() {
+            for &v in e {
+                list[fill[v as usize]] = ei as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        self.vertex_edge_ptr = ptr;
+        self.vertex_edges = list;
+    }
+
     fn rebuild_free(&mut self) {
         self.free = (0..self.home.len() as u32)
             .filter(|&i| !self.pinned[i as usize])
@@ -627,6 +662,10 @@ impl MassSpringSurface {
     /// Is vertex `i` pinned?
     pub fn is_pinned(&self, i: u32) -> bool {
         self.pinned[i as usize]
+    }
+    /// The triangles kept (degenerate ones dropped), for rendering and colliders.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
     }
     /// User triangles dropped as degenerate.
     pub fn dropped_triangles(&self) -> &[u32] {
@@ -787,6 +826,38 @@ impl MassSpringSurface {
         Ok(())
     }
 
+    /// Marks vertex `i` as held by something outside the surface (a tool) for the following
+    /// steps, until [`MassSpringSurface::release_all`]: the holder balances its net force, so it
+    /// neither accelerates nor passes its force on through the filter; it keeps the velocity
+    /// given by [`MassSpringSurface::set_state`]. A held vertex's
+    /// [`MassSpringSurface::internal_force`] is what it pushes the holder with.
+    ///
+    /// # Errors
+    /// [`SurfaceError::VertexOutOfRange`].
+    pub fn hold(&mut self, i: u32) -> Result<(), SurfaceError> {
+        self.check_vertex(i)?;
+        self.held[i as usize] = true;
+        self.any_held = true;
+        Ok(())
+    }
+    /// Releases vertex `i` if held.
+    pub fn release(&mut self, i: u32) {
+        if let Some(h) = self.held.get_mut(i as usize) {
+            *h = false;
+        }
+    }
+    /// Releases every held vertex.
+    pub fn release_all(&mut self) {
+        if self.any_held {
+            self.held.iter_mut().for_each(|h| *h = false);
+            self.any_held = false;
+        }
+    }
+    /// Is vertex `i` held?
+    pub fn is_held(&self, i: u32) -> bool {
+        self.held.get(i as usize).copied().unwrap_or(false)
+    }
+
     fn check_vertex(&self, i: u32) -> Result<(), SurfaceError> {
         if (i as usize) < self.home.len() {
             Ok(())
@@ -823,12 +894,18 @@ impl MassSpringSurface {
     }
 
     /// The spring and damper force on vertex `i` (what it pushes back with when held).
+    /// `O(degree)`.
     pub fn internal_force(&self, i: u32) -> Vector {
         let mut f = DVec3::ZERO;
-        for (e, &[a, b]) in self.edges.iter().enumerate() {
-            if a == i {
+        let i = i as usize;
+        if i + 1 >= self.vertex_edge_ptr.len() {
+            return Vector::ZERO;
+        }
+        for &e in &self.vertex_edges[self.vertex_edge_ptr[i]..self.vertex_edge_ptr[i + 1]] {
+            let e = e as usize;
+            if self.edges[e][0] as usize == i {
                 f += self.edge_force(e);
-            } else if b == i {
+            } else {
                 f -= self.edge_force(e);
             }
         }
@@ -889,6 +966,13 @@ impl MassSpringSurface {
                     let f = spring + (self.vel[b] - self.vel[a]) * (c + kv_dt * k);
                     self.force[a] += f;
                     self.force[b] -= f;
+                }
+            }
+        }
+        if self.any_held {
+            for (f, h) in self.force.iter_mut().zip(&self.held) {
+                if *h {
+                    *f = DVec3::ZERO;
                 }
             }
         }
@@ -1027,6 +1111,13 @@ impl MassSpringSurface {
             return;
         };
         filter.apply(&self.rhs, &mut self.dv);
+        if self.any_held {
+            for (dv, &v) in self.dv.iter_mut().zip(&self.free) {
+                if self.held[v as usize] {
+                    *dv = DVec3::ZERO;
+                }
+            }
+        }
         if self.free.len() == self.home.len()
             && matches!(filter.kind(), FilterKind::Neighbour { .. })
         {

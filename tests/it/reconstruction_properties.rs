@@ -131,7 +131,14 @@ proptest! {
         };
         let mut rec = Reconstructor::default();
         let c = rec.reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
-        prop_assert_eq!(c.state, TouchState::Penetrating);
+        // `pen` is below the smallest box edge, not the smallest width along `u`: a thin part
+        // can be passed right through. parry's own contact query says which it is.
+        let expected = match query::contact(&pose_f, &a, &now, &b, 0.0) {
+            Ok(Some(k)) if k.dist < -1e-5 => TouchState::Penetrating,
+            Ok(None) => TouchState::Perforated,
+            _ => return Err(TestCaseError::reject("grazing: parry's depth is below tolerance")),
+        };
+        prop_assert_eq!(c.state, expected);
         prop_assert!(c.on_trajectory);
         // Agrees with parry's linear shape cast from the pre-step pose.
         let len = toi + pen;
@@ -141,8 +148,18 @@ proptest! {
         let contact_dist = |p: &Pose| {
             parry3d::query::contact(&pose_f, &a, p, &b, 0.01).ok().flatten().map(|c| c.dist)
         };
+        // parry's cast stops on a distance tolerance, so at grazing angles its time of impact
+        // can be off by more than 1e-4 along the motion; where the two disagree, parry's own
+        // contact query must find our pose touching and the cast's pose farther from touch.
+        let agree = (c.depth - pen).abs() <= 1e-4 * len;
+        let ours_better = match (contact_dist(&ours), contact_dist(&cast_pose)) {
+            (Some(d_ours), Some(d_cast)) => {
+                d_ours.abs() <= 1e-5 * fixed.scale().max(moving.scale()) && d_cast.abs() > d_ours.abs()
+            }
+            _ => false,
+        };
         prop_assert!(
-            (c.depth - pen).abs() <= 1e-4 * len,
+            agree || ours_better,
             "depth {} vs cast {} (len {}): parry contact dist at the cast's pose {:?}, at ours {:?}",
             c.depth,
             pen,
@@ -155,7 +172,7 @@ proptest! {
         // Swapping which object moves: the other one moved by -D.
         let d = now.translation - prev.translation;
         let s = rec.reconstruct(&moving, &now, &fixed, &pose_f, &shifted(&pose_f, d)).unwrap();
-        prop_assert_eq!(s.state, TouchState::Penetrating);
+        prop_assert_eq!(s.state, expected);
         prop_assert!((s.depth - c.depth).abs() <= 1e-5 * fixed.scale().max(moving.scale()));
         prop_assert!((s.reversing_vector + c.reversing_vector).length() <= 1e-5 * len);
         let mut k1: Vec<_> = c.patches.iter().map(|p| p.kind as u8).collect();
@@ -216,6 +233,9 @@ proptest! {
         let Some((_, now, _)) = approach(&a, &Pose::IDENTITY, &b, rm, u, Vector::ZERO, pen) else {
             return Err(TestCaseError::reject("path misses"));
         };
+        if !matches!(query::contact(&Pose::IDENTITY, &a, &now, &b, 0.0), Ok(Some(k)) if k.dist < -1e-5) {
+            return Err(TestCaseError::reject("passed through a thin part: nothing to undo"));
+        }
         let c = Reconstructor::default()
             .reconstruct(&fixed, &Pose::IDENTITY, &moving, &now, &now)
             .unwrap();

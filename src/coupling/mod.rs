@@ -1,0 +1,10 @@
+//! Soft surfaces in a rapier pipeline: [`SurfaceSet`] attaches [`crate::surface::MassSpringSurface`]s
+//! to rigid bodies, gives them colliders that follow the deformation, lets any number of rigid
+//! tools press into them, and returns each tool's reaction force (two-way for dynamic tools).
+
+mod surface_set;
+
+pub use surface_set::{
+    AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,
+    SURFACE_SOLVER_GROUP,
+};

@@ -1,0 +1,485 @@
+//! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
+
+use crate::math::{Pose, Real, Vector};
+use crate::surface::{MassSpringSurface, SurfaceError};
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::query::Ray;
+use parry3d::shape::{SharedShape, TriMeshFlags};
+use rapier3d::dynamics::RigidBodyHandle;
+use rapier3d::geometry::{ColliderBuilder, ColliderHandle, Group, InteractionGroups};
+use rapier3d::pipeline::PhysicsWorld;
+use std::collections::HashMap;
+
+/// The solver group this crate reserves for surface colliders: tools registered with
+/// [`SurfaceSet::add_tool`] drop it from their solver-group filter, so rapier does not also
+/// treat the surface as rigid against them (the surface's own forces act instead).
+pub const SURFACE_SOLVER_GROUP: Group = Group::GROUP_32;
+
+/// Why a surface could not be attached.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CouplingError {
+    /// The body handle is not in the world.
+    #[error("the rigid body is not in the world")]
+    NoSuchBody,
+    /// Substeps must be at least 1.
+    #[error("substeps must be at least 1")]
+    InvalidSubsteps,
+    /// The surface rejected its new time step.
+    #[error(transparent)]
+    Surface(#[from] SurfaceError),
+    /// parry rejected the surface's triangle mesh.
+    #[error("the surface mesh cannot be a collider: {0}")]
+    Collider(String),
+}
+
+/// A handle to a surface in a [`SurfaceSet`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub struct SurfaceHandle {
+    index: u32,
+    generation: u32,
+}
+
+/// How a surface is attached.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct AttachOptions {
+    /// Surface steps per rigid step (a 1 kHz surface in a 60 Hz scene: 17). The surface's time
+    /// step becomes the world's `dt / substeps`. Default 1.
+    pub substeps: u32,
+    /// Give the body a TriMesh collider that follows the deformed surface (updated once per
+    /// rigid step). Default `true`.
+    pub collider: bool,
+}
+
+impl Default for AttachOptions {
+    fn default() -> Self {
+        Self {
+            substeps: 1,
+            collider: true,
+        }
+    }
+}
+
+/// What a surface pushes back on one tool with, after the last step.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct ToolReaction {
+    /// Net force on the tool at the end of the last surface substep (N, world frame): the sum
+    /// of the spring and damper forces of the vertices it holds. What a haptic device renders.
+    pub force: Vector,
+    /// Torque of those forces about the tool body's centre of mass (N·m, world frame).
+    pub torque: Vector,
+    /// The force averaged over the rigid step's substeps (N): what a dynamic tool receives.
+    pub mean_force: Vector,
+    /// Number of surface vertices the tool holds.
+    pub held_vertices: usize,
+}
+
+/// A surface attached to a rigid body.
+pub struct AttachedSurface {
+    /// The deformable model (its positions live in the body's frame).
+    pub surface: MassSpringSurface,
+    body: RigidBodyHandle,
+    collider: Option<ColliderHandle>,
+    substeps: u32,
+    scratch: Vec<Vector>,
+    before: Vec<Vector>,
+}
+
+impl AttachedSurface {
+    /// The body carrying the surface.
+    pub fn body(&self) -> RigidBodyHandle {
+        self.body
+    }
+    /// The collider following the deformed surface, if any.
+    pub fn collider(&self) -> Option<ColliderHandle> {
+        self.collider
+    }
+    /// Surface steps per rigid step.
+    pub fn substeps(&self) -> u32 {
+        self.substeps
+    }
+}
+
+#[derive(Clone, Debug)]
+struct ToolState {
+    prev: Option<Pose>,
+    reaction: ToolReaction,
+    /// The force and torque this set currently adds to the tool's body.
+    applied: (Vector, Vector),
+}
+
+/// Soft surfaces on rapier bodies and the rigid tools that press into them.
+///
+/// # Stepping
+/// [`SurfaceSet::step`] runs rapier's step, then each surface's substeps. In every substep the
+/// tools' poses are interpolated between the start and the end of the rigid step, expressed in
+/// the surface body's frame, and every surface vertex a tool contains is moved out along the
+/// tool's own motion over the substep (the vertex form of the inverse trajectory mapping, eq.
+/// 1-2), or to the nearest tool surface point when the tool did not move; it takes the tool's
+/// velocity. The filter then spreads that deformation over the next substep. The reaction on a
+/// tool is the sum of the spring and damper forces of the vertices it holds. Dynamic tools
+/// carry the substep-averaged reaction as a rapier force through the next rigid step (one step
+/// of lag),
+/// and surface colliders are updated once per rigid step (`TriMesh::set_vertices`, a BVH
+/// refit).
+///
+/// # Limitations
+/// - Loading happens at vertices: a sharp tool tip pressing inside a large triangle with no
+///   vertex inside the tool is not seen. Mesh the surface finer than the tool.
+/// - Tools are tested with parry's point queries: convex shapes (balls, cuboids, capsules,
+///   convex polyhedra). A TriMesh tool is not solid for parry and holds no vertex.
+/// - The surface is rigidly attached to its body's frame; the body's acceleration does not
+///   load it.
+pub struct SurfaceSet {
+    entries: Vec<(u32, Option<AttachedSurface>)>,
+    tools: HashMap<ColliderHandle, ToolState>,
+}
+
+impl Default for SurfaceSet {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SurfaceSet {
+    /// An empty set.
+    pub fn new() -> Self {
+        Self {
+            entries: Vec::new(),
+            tools: HashMap::new(),
+        }
+    }
+
+    /// Attaches `surface` (positions in `body`'s frame) to `body`.
+    ///
+    /// # Errors
+    /// See [`CouplingError`].
+    pub fn insert(
+        &mut self,
+        mut surface: MassSpringSurface,
+        body: RigidBodyHandle,
+        world: &mut PhysicsWorld,
+        options: AttachOptions,
+    ) -> Result<SurfaceHandle, CouplingError> {
+        if !world.bodies.contains(body) {
+            return Err(CouplingError::NoSuchBody);
+        }
+        if options.substeps == 0 {
+            return Err(CouplingError::InvalidSubsteps);
+        }
+        surface.set_dt(world.integration_parameters.dt / options.substeps as Real)?;
+        let mut verts = Vec::new();
+        surface.positions_into(&mut verts);
+        let collider = if options.collider {
+            let shape = SharedShape::trimesh_with_flags(
+                verts.clone(),
+                surface.triangles().to_vec(),
+                TriMeshFlags::DEFORMABLE,
+            )
+            .map_err(|e| CouplingError::Collider(format!("{e:?}")))?;
+            let c = ColliderBuilder::new(shape)
+                .solver_groups(InteractionGroups::new(
+                    SURFACE_SOLVER_GROUP,
+                    Group::ALL,
+                    Default::default(),
+                ))
+                .build();
+            Some(world.insert_collider(c, Some(body)))
+        } else {
+            None
+        };
+        let attached = AttachedSurface {
+            surface,
+            body,
+            collider,
+            substeps: options.substeps,
+            before: verts.clone(),
+            scratch: verts,
+        };
+        if let Some(i) = self.entries.iter().position(|e| e.1.is_none()) {
+            let generation = self.entries[i].0 + 1;
+            self.entries[i] = (generation, Some(attached));
+            return Ok(SurfaceHandle {
+                index: i as u32,
+                generation,
+            });
+        }
+        self.entries.push((0, Some(attached)));
+        Ok(SurfaceHandle {
+            index: self.entries.len() as u32 - 1,
+            generation: 0,
+        })
+    }
+
+    /// Detaches a surface (and removes its collider from the world).
+    pub fn remove(
+        &mut self,
+        h: SurfaceHandle,
+        world: &mut PhysicsWorld,
+    ) -> Option<AttachedSurface> {
+        let entry = self.entries.get_mut(h.index as usize)?;
+        if entry.0 != h.generation {
+            return None;
+        }
+        let s = entry.1.take()?;
+        if let Some(c) = s.collider {
+            world.remove_collider(c);
+        }
+        Some(s)
+    }
+
+    /// The surface behind a handle.
+    pub fn get(&self, h: SurfaceHandle) -> Option<&AttachedSurface> {
+        let e = self.entries.get(h.index as usize)?;
+        (e.0 == h.generation).then_some(())?;
+        e.1.as_ref()
+    }
+
+    /// The surface behind a handle, mutably (forces, pins, integrator).
+    pub fn get_mut(&mut self, h: SurfaceHandle) -> Option<&mut AttachedSurface> {
+        let e = self.entries.get_mut(h.index as usize)?;
+        (e.0 == h.generation).then_some(())?;
+        e.1.as_mut()
+    }
+
+    /// Registers collider `tool` as a tool pressing into every surface of the set, and drops
+    /// [`SURFACE_SOLVER_GROUP`] from its solver-group filter.
+    pub fn add_tool(&mut self, tool: ColliderHandle, world: &mut PhysicsWorld) {
+        if let Some(c) = world.colliders.get_mut(tool) {
+            let g = c.solver_groups();
+            c.set_solver_groups(InteractionGroups::new(
+                g.memberships,
+                g.filter & !SURFACE_SOLVER_GROUP,
+                g.test_mode,
+            ));
+        }
+        self.tools.insert(
+            tool,
+            ToolState {
+                prev: None,
+                reaction: ToolReaction::default(),
+                applied: (Vector::ZERO, Vector::ZERO),
+            },
+        );
+    }
+
+    /// Stops treating `tool` as a tool (the vertices it held are released).
+    pub fn remove_tool(&mut self, tool: ColliderHandle) {
+        self.tools.remove(&tool);
+    }
+
+    /// The reaction on `tool` after the last step.
+    pub fn tool_reaction(&self, tool: ColliderHandle) -> Option<ToolReaction> {
+        self.tools.get(&tool).map(|t| t.reaction)
+    }
+
+    /// Steps rapier, then every surface (see the type's docs).
+    pub fn step(&mut self, world: &mut PhysicsWorld) {
+        self.step_with(world, |w| w.step());
+    }
+
+    /// Like [`SurfaceSet::step`] with your own rigid step (e.g. a
+    /// [`crate::hooks::TouchPipeline`]).
+    pub fn step_with(
+        &mut self,
+        world: &mut PhysicsWorld,
+        rigid_step: impl FnOnce(&mut PhysicsWorld),
+    ) {
+        // Tool poses at the start of the step.
+        self.tools.retain(|h, _| world.colliders.contains(*h));
+        for (h, t) in self.tools.iter_mut() {
+            t.prev = world.colliders.get(*h).map(|c| *c.position());
+        }
+        rigid_step(world);
+        self.step_surfaces(world);
+    }
+
+    /// The surface part of a step: substeps with the tools' poses interpolated from the
+    /// recorded start poses to their current ones, reactions, impulses on dynamic tools, and
+    /// collider updates.
+    fn step_surfaces(&mut self, world: &mut PhysicsWorld) {
+        let dt = world.integration_parameters.dt;
+        for t in self.tools.values_mut() {
+            t.reaction = ToolReaction::default();
+        }
+        let tool_list: Vec<(ColliderHandle, Pose, Pose)> = self
+            .tools
+            .iter()
+            .filter_map(|(h, t)| {
+                let c = world.colliders.get(*h)?;
+                let now = *c.position();
+                Some((*h, t.prev.unwrap_or(now), now))
+            })
+            .collect();
+        let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
+        for (_, entry) in self.entries.iter_mut() {
+            let Some(s) = entry.as_mut() else {
+                continue;
+            };
+            let Some(body) = world.bodies.get(s.body) else {
+                continue;
+            };
+            let body_pose = *body.position();
+            let inv = body_pose.inverse();
+            let n = s.substeps.max(1);
+            for k in 1..=n {
+                let a = k as Real / n as Real;
+                let a_prev = (k - 1) as Real / n as Real;
+                s.surface.positions_into(&mut s.before);
+                s.surface.step();
+                s.surface.release_all();
+                for (th, p0, p1) in &tool_list {
+                    let Some(tool) = world.colliders.get(*th) else {
+                        continue;
+                    };
+                    let pose = inv * lerp_pose(p0, p1, a);
+                    let before = inv * lerp_pose(p0, p1, a_prev);
+                    let h = dt / n as Real;
+                    let (force, torque_arm_sum, held) = hold_vertices(
+                        &mut s.surface,
+                        tool.shape(),
+                        &pose,
+                        &before,
+                        h,
+                        &s.before,
+                        &mut s.scratch,
+                    );
+                    let world_force = body_pose.rotation * force;
+                    let centre = world
+                        .bodies
+                        .get(tool.parent().unwrap_or(RigidBodyHandle::invalid()))
+                        .map(|b| b.center_of_mass())
+                        .unwrap_or(p1.translation);
+                    // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
+                    let torque = body_pose.rotation * torque_arm_sum
+                        - (centre - body_pose.translation).cross(world_force);
+                    let m = mean.entry(*th).or_insert((Vector::ZERO, Vector::ZERO));
+                    m.0 += world_force / n as Real;
+                    m.1 += torque / n as Real;
+                    if k == n {
+                        if let Some(t) = self.tools.get_mut(th) {
+                            t.reaction.force += world_force;
+                            t.reaction.torque += torque;
+                            t.reaction.held_vertices += held;
+                        }
+                    }
+                }
+            }
+            if let Some(ch) = s.collider {
+                s.surface.positions_into(&mut s.scratch);
+                if let Some(c) = world.colliders.get_mut(ch) {
+                    if let Some(m) = c.shape_mut().as_trimesh_mut() {
+                        m.set_vertices(&s.scratch);
+                    }
+                }
+            }
+        }
+        // Two-way coupling: dynamic tools carry the averaged reaction as a rapier force during
+        // the next rigid step (one step of lag). The crate's previous contribution is replaced,
+        // the user's own forces on the body are left alone.
+        for (th, t) in self.tools.iter_mut() {
+            let (f, tq) = mean
+                .get(th)
+                .copied()
+                .unwrap_or((Vector::ZERO, Vector::ZERO));
+            t.reaction.mean_force = f;
+            let (f, tq) = if f.is_finite() && tq.is_finite() {
+                (f, tq)
+            } else {
+                (Vector::ZERO, Vector::ZERO)
+            };
+            let Some(parent) = world.colliders.get(*th).and_then(|c| c.parent()) else {
+                continue;
+            };
+            if let Some(b) = world.bodies.get_mut(parent) {
+                if b.is_dynamic() {
+                    b.add_force(f - t.applied.0, true);
+                    b.add_torque(tq - t.applied.1, true);
+                    t.applied = (f, tq);
+                }
+            }
+        }
+    }
+}
+
+fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
+    Pose::from_parts(
+        a.translation.lerp(b.translation, t),
+        a.rotation.slerp(b.rotation, t),
+    )
+}
+
+/// Moves every surface vertex the tool contains out of it and holds it there with the tool's
+/// velocity; returns the force the held vertices push the tool with, `Σ p × f` (surface frame)
+/// and how many vertices it holds.
+///
+/// The way out is the vertex's inverse trajectory relative to the tool (eq. 1-2 for one
+/// vertex): from where it is, back along its own motion over the substep minus the tool's,
+/// to the tool's boundary. With no relative motion, the nearest boundary point.
+#[allow(clippy::too_many_arguments)]
+fn hold_vertices(
+    surface: &mut MassSpringSurface,
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    before: &Pose,
+    h: Real,
+    prev_positions: &[Vector],
+    scratch: &mut Vec<Vector>,
+) -> (Vector, Vector, usize) {
+    let aabb: Aabb = shape.compute_aabb(pose);
+    let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
+    let motion = pose.translation - before.translation;
+    surface.positions_into(scratch);
+    let mut held = Vec::new();
+    for (i, p) in scratch.iter().enumerate() {
+        if !aabb.contains_local_point(*p)
+            || surface.is_pinned(i as u32)
+            || surface.is_held(i as u32)
+        {
+            continue;
+        }
+        // In contact: inside the tool, or on its boundary (where the last substep left a held
+        // vertex) within a hair.
+        let margin = 1e-6 * (1.0 + aabb.extents().max_element());
+        if shape.distance_to_point(pose, *p, true) > margin {
+            continue;
+        }
+        let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
+        let rel = motion - own;
+        let nearest = shape.project_point(pose, *p, false).point;
+        // Only a vertex that can have entered during this substep (relative motion longer than
+        // its depth) is walked back along it; one that moved with the tool stays on the
+        // boundary and is only snapped to it.
+        let out = if rel.length() > (nearest - *p).length() + margin {
+            let d = rel.normalize();
+            shape
+                .cast_ray(pose, &Ray::new(*p, d), Real::MAX, false)
+                .map_or(nearest, |t| *p + d * t)
+        } else {
+            nearest
+        };
+        // The tool's velocity at the vertex (translation only over the substep).
+        let v = if h > 0.0 { motion / h } else { Vector::ZERO };
+        if out.is_finite() && surface.set_state(i as u32, out, v).is_ok() {
+            let _ = surface.hold(i as u32);
+            held.push(i as u32);
+        }
+    }
+    // Contact only pushes: a held vertex whose springs pull it into the tool (it would stick
+    // to a receding tool) is let go.
+    let mut force = Vector::ZERO;
+    let mut moment = Vector::ZERO;
+    let mut count = 0;
+    for &i in &held {
+        let f = surface.internal_force(i);
+        let p = surface.position(i);
+        let inward = pose.translation - p;
+        if f.dot(inward) < 0.0 {
+            surface.release(i);
+            continue;
+        }
+        force += f;
+        moment += p.cross(f);
+        count += 1;
+    }
+    (force, moment, count)
+}

@@ -1,0 +1,311 @@
+//! Soft surfaces in a real rapier pipeline: a tool pressed a known depth gets the static spring
+//! solution's force; several tools each get their own force and, with the pins' reactions, sum
+//! to zero; a released surface returns home; a dynamic ball comes to rest on a soft plate; a
+//! surface on a moving kinematic body follows it.
+
+use nalgebra::{DMatrix, DVector};
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+
+const N: u32 = 10; // cells per side: 11 x 11 vertices, 0.1 m apart
+
+fn plate_mesh() -> (Vec<Vector>, Vec<[u32; 3]>) {
+    let mut v = Vec::new();
+    for i in 0..=N {
+        for j in 0..=N {
+            v.push(Vector::new(i as f32 * 0.1, 0.0, j as f32 * 0.1));
+        }
+    }
+    let mut t = Vec::new();
+    for i in 0..N {
+        for j in 0..N {
+            let a = i * (N + 1) + j;
+            let b = a + N + 1;
+            t.push([a, b, a + 1]);
+            t.push([b, b + 1, a + 1]);
+        }
+    }
+    (v, t)
+}
+
+fn vid(i: u32, j: u32) -> u32 {
+    i * (N + 1) + j
+}
+
+fn boundary() -> Vec<u32> {
+    (0..=N)
+        .flat_map(|i| (0..=N).map(move |j| (i, j)))
+        .filter(|&(i, j)| i == 0 || j == 0 || i == N || j == N)
+        .map(|(i, j)| vid(i, j))
+        .collect()
+}
+
+const K: f32 = 100.0;
+
+fn world_with_plate(substeps: u32) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
+    let mut world = PhysicsWorld::default();
+    world.gravity = Vector::ZERO; // (set after Default: PhysicsWorld has no builder)
+    let body = world.insert_body(RigidBodyBuilder::fixed());
+    let (v, t) = plate_mesh();
+    let surface = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(K)
+        .damping(1.0)
+        .mass(MassDistribution::PerVertex(0.01))
+        .pinned(boundary())
+        .integrator(Integrator::EXACT)
+        .build()
+        .unwrap();
+    let mut set = SurfaceSet::new();
+    let h = set
+        .insert(
+            surface,
+            body,
+            &mut world,
+            AttachOptions {
+                substeps,
+                collider: true,
+            },
+        )
+        .unwrap();
+    (world, set, h)
+}
+
+fn add_ball_tool(
+    world: &mut PhysicsWorld,
+    set: &mut SurfaceSet,
+    at: Vector,
+    r: f32,
+) -> (RigidBodyHandle, ColliderHandle) {
+    let b = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(at));
+    let c = world.insert_collider(ColliderBuilder::ball(r), Some(b));
+    set.add_tool(c, world);
+    (b, c)
+}
+
+/// Static reference: vertex `c` held at displacement `-depth` (y), pins at zero, the others
+/// free in equilibrium; the force the surface pushes the holder with (linear springs).
+fn static_force(held: &[(u32, f64)]) -> Vec<f64> {
+    let (v, t) = plate_mesh();
+    let n = v.len();
+    let mut lap = DMatrix::<f64>::zeros(n, n);
+    let mut edges = std::collections::BTreeSet::new();
+    for tri in &t {
+        for k in 0..3 {
+            let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
+            edges.insert((a as usize, b as usize));
+        }
+    }
+    for &(a, b) in &edges {
+        lap[(a, a)] += K as f64;
+        lap[(b, b)] += K as f64;
+        lap[(a, b)] -= K as f64;
+        lap[(b, a)] -= K as f64;
+    }
+    let pins = boundary();
+    let mut u = vec![0.0; n];
+    for &(c, d) in held {
+        u[c as usize] = -d;
+    }
+    let known: Vec<bool> = (0..n as u32)
+        .map(|i| pins.contains(&i) || held.iter().any(|h| h.0 == i))
+        .collect();
+    let free: Vec<usize> = (0..n).filter(|&i| !known[i]).collect();
+    let a = DMatrix::from_fn(free.len(), free.len(), |r, c| lap[(free[r], free[c])]);
+    let rhs = DVector::from_fn(free.len(), |r, _| {
+        -(0..n)
+            .filter(|&j| known[j])
+            .map(|j| lap[(free[r], j)] * u[j])
+            .sum::<f64>()
+    });
+    let x = a.lu().solve(&rhs).unwrap();
+    for (r, &i) in free.iter().enumerate() {
+        u[i] = x[r];
+    }
+    // Internal force at each held vertex: -(L u)_c; the tool receives it.
+    held.iter()
+        .map(|&(c, _)| -(0..n).map(|j| lap[(c as usize, j)] * u[j]).sum::<f64>())
+        .collect()
+}
+
+/// Drives the tool from `start` to `end` over `ramp` steps, then holds it for `hold` steps.
+fn press(
+    world: &mut PhysicsWorld,
+    set: &mut SurfaceSet,
+    tools: &[(RigidBodyHandle, Vector, Vector)],
+    ramp: usize,
+    hold: usize,
+) {
+    for s in 0..ramp + hold {
+        let a = ((s + 1) as f32 / ramp as f32).min(1.0);
+        for (b, from, to) in tools {
+            world.bodies[*b].set_next_kinematic_translation(from.lerp(*to, a));
+        }
+        set.step(world);
+    }
+}
+
+#[test]
+fn pressed_tool_force_matches_the_static_spring_solution() {
+    let (mut world, mut set, _) = world_with_plate(8);
+    let r = 0.02;
+    let depth = 0.01;
+    let c = Vector::new(0.5, 0.0, 0.5);
+    let (b, tool) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, r);
+    press(
+        &mut world,
+        &mut set,
+        &[(b, c + Vector::Y * 0.1, c + Vector::Y * (r - depth))],
+        30,
+        240,
+    );
+    let reaction = set.tool_reaction(tool).unwrap();
+    assert_eq!(reaction.held_vertices, 1);
+    let expected = static_force(&[(vid(5, 5), depth as f64)])[0];
+    let got = reaction.force.y as f64;
+    assert!(expected > 0.0);
+    assert!(
+        (got - expected).abs() <= 0.05 * expected,
+        "force {got} N vs static {expected} N"
+    );
+    assert!(
+        reaction.force.x.abs() < 1e-3 * got as f32 && reaction.force.z.abs() < 1e-3 * got as f32
+    );
+}
+
+#[test]
+fn several_tools_get_their_own_forces_and_balance_the_pins() {
+    for count in [2usize, 6] {
+        let (mut world, mut set, h) = world_with_plate(4);
+        let spots = [(2, 2), (2, 7), (7, 2), (7, 7), (5, 4), (4, 6)];
+        let mut tools = Vec::new();
+        let mut drives = Vec::new();
+        let mut held = Vec::new();
+        for (k, &(i, j)) in spots.iter().take(count).enumerate() {
+            let depth = 0.004 + 0.002 * k as f32;
+            let c = Vector::new(i as f32 * 0.1, 0.0, j as f32 * 0.1);
+            let (b, t) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, 0.02);
+            drives.push((b, c + Vector::Y * 0.1, c + Vector::Y * (0.02 - depth)));
+            tools.push(t);
+            held.push((vid(i, j), depth as f64));
+        }
+        press(&mut world, &mut set, &drives, 30, 300);
+        let expected = static_force(&held);
+        let mut total = Vector::ZERO;
+        for (k, t) in tools.iter().enumerate() {
+            let f = set.tool_reaction(*t).unwrap().force;
+            assert!(
+                (f.y as f64 - expected[k]).abs() <= 0.05 * expected[k],
+                "{count} tools, tool {k}: {} vs {}",
+                f.y,
+                expected[k]
+            );
+            total += f;
+        }
+        let s = &set.get(h).unwrap().surface;
+        let pins: Vector = boundary().iter().map(|&p| s.internal_force(p)).sum();
+        let sum_abs: f32 = tools
+            .iter()
+            .map(|t| set.tool_reaction(*t).unwrap().force.length())
+            .sum();
+        assert!(
+            (total + pins).length() <= 0.01 * sum_abs,
+            "{count} tools: tools {total:?} + pins {pins:?}"
+        );
+    }
+}
+
+#[test]
+fn tool_pulled_away_leaves_the_surface_returning_home() {
+    let (mut world, mut set, h) = world_with_plate(4);
+    let c = Vector::new(0.5, 0.0, 0.5);
+    let (b, tool) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, 0.05);
+    let down = c + Vector::Y * 0.02;
+    press(
+        &mut world,
+        &mut set,
+        &[(b, c + Vector::Y * 0.1, down)],
+        30,
+        60,
+    );
+    let d0 = set.get(h).unwrap().surface.max_displacement();
+    assert!(d0 > 0.02);
+    press(
+        &mut world,
+        &mut set,
+        &[(b, down, c + Vector::new(0.3, 0.5, 0.0))],
+        30,
+        600,
+    );
+    assert_eq!(set.tool_reaction(tool).unwrap().held_vertices, 0);
+    let d1 = set.get(h).unwrap().surface.max_displacement();
+    assert!(d1 < 1e-3 * d0, "still {d1} m from home");
+}
+
+#[test]
+fn dynamic_ball_comes_to_rest_on_a_soft_plate() {
+    let (mut world, mut set, h) = world_with_plate(8);
+    world.gravity = Vector::new(0.0, -9.81, 0.0);
+    let r = 0.06;
+    let ball =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.5, 0.4, 0.5)));
+    let c = world.insert_collider(ColliderBuilder::ball(r).density(100.0), Some(ball));
+    set.add_tool(c, &mut world);
+    let weight = world.bodies[ball].mass() * 9.81;
+    let mut lowest = f32::MAX;
+    let (mut support, mut ys) = (0.0f32, Vec::new());
+    for k in 0..600 {
+        set.step(&mut world);
+        let y = world.bodies[ball].translation().y;
+        lowest = lowest.min(y);
+        if k >= 480 {
+            support += set.tool_reaction(c).unwrap().mean_force.y / 120.0;
+            ys.push(y);
+        }
+    }
+    // At rest: the last two seconds stay within a millimetre, in a dent of the surface, never
+    // through it.
+    let (lo, hi) = ys
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), y| (a.min(*y), b.max(*y)));
+    assert!(hi - lo < 1e-3, "still moving: y in [{lo}, {hi}]");
+    assert!(lo > -r && lowest > -r, "ball centre reached {lowest}");
+    assert!(set.get(h).unwrap().surface.max_displacement() > 1e-3);
+    // On average the surface carries the ball's weight.
+    assert!(
+        (support - weight).abs() <= 0.05 * weight,
+        "support {support} N vs weight {weight} N"
+    );
+}
+
+#[test]
+fn surface_on_a_moving_kinematic_body_follows_it() {
+    let mut world = PhysicsWorld::default();
+    let body = world.insert_body(
+        RigidBodyBuilder::kinematic_velocity_based().linvel(Vector::new(1.0, 0.0, 0.0)),
+    );
+    let (v, t) = plate_mesh();
+    let surface = MassSpringSurfaceBuilder::new(v, t)
+        .pinned(boundary())
+        .build()
+        .unwrap();
+    let mut set = SurfaceSet::new();
+    let h = set
+        .insert(surface, body, &mut world, AttachOptions::default())
+        .unwrap();
+    for _ in 0..60 {
+        set.step(&mut world);
+    }
+    let x = world.bodies[body].translation().x;
+    assert!((x - 1.0).abs() < 1e-3);
+    let collider = set.get(h).unwrap().collider().unwrap();
+    let aabb = world.colliders[collider].compute_aabb();
+    assert!((aabb.mins.x - x).abs() < 1e-3 && (aabb.maxs.x - (x + 1.0)).abs() < 1e-3);
+    // A ray cast sees the surface where the body took it.
+    world.step();
+    let hit = world.query_pipeline().cast_ray(
+        &Ray::new(Vector::new(x + 0.5, 1.0, 0.5), -Vector::Y),
+        10.0,
+        true,
+    );
+    assert!(matches!(hit, Some((c, toi)) if c == collider && (toi - 1.0).abs() < 1e-3));
+}
