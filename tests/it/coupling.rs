@@ -43,8 +43,10 @@ fn boundary() -> Vec<u32> {
 const K: f32 = 100.0;
 
 fn world_with_plate(substeps: u32) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
-    let mut world = PhysicsWorld::default();
-    world.gravity = Vector::ZERO; // (set after Default: PhysicsWorld has no builder)
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
     let body = world.insert_body(RigidBodyBuilder::fixed());
     let (v, t) = plate_mesh();
     let surface = MassSpringSurfaceBuilder::new(v, t)
