@@ -311,3 +311,46 @@ fn surface_on_a_moving_kinematic_body_follows_it() {
     );
     assert!(matches!(hit, Some((c, toi)) if c == collider && (toi - 1.0).abs() < 1e-3));
 }
+
+#[test]
+fn removing_a_tool_or_the_surface_mid_run_works() {
+    let (mut world, mut set, h) = world_with_plate(4);
+    let c = Vector::new(0.5, 0.0, 0.5);
+    let (b, tool) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, 0.05);
+    let (b2, tool2) = add_ball_tool(&mut world, &mut set, c + Vector::new(0.2, 0.1, 0.0), 0.05);
+    press(
+        &mut world,
+        &mut set,
+        &[
+            (b, c + Vector::Y * 0.1, c + Vector::Y * 0.03),
+            (
+                b2,
+                c + Vector::new(0.2, 0.1, 0.0),
+                c + Vector::new(0.2, 0.03, 0.0),
+            ),
+        ],
+        20,
+        20,
+    );
+    assert!(set.tool_reaction(tool).unwrap().held_vertices > 0);
+    // Remove one tool's collider from the world, and the other from the set.
+    world.remove_collider(tool);
+    set.remove_tool(tool2);
+    for _ in 0..300 {
+        set.step(&mut world);
+    }
+    assert!(set.tool_reaction(tool).is_none() && set.tool_reaction(tool2).is_none());
+    let s = &set.get(h).unwrap().surface;
+    assert!(
+        s.max_displacement() < 1e-4,
+        "released surface at {}",
+        s.max_displacement()
+    );
+    // Remove the surface: its collider goes too, stepping goes on.
+    let collider = set.get(h).unwrap().collider().unwrap();
+    assert!(set.remove(h, &mut world).is_some());
+    assert!(set.get(h).is_none() && !world.colliders.contains(collider));
+    for _ in 0..10 {
+        set.step(&mut world);
+    }
+}
