@@ -82,6 +82,7 @@ pub struct AttachedSurface {
     substeps: u32,
     scratch: Vec<Vector>,
     before: Vec<Vector>,
+    was_held: Vec<bool>,
 }
 
 impl AttachedSurface {
@@ -105,6 +106,8 @@ struct ToolState {
     reaction: ToolReaction,
     /// The force and torque this set currently adds to the tool's body.
     applied: (Vector, Vector),
+    /// The device pose of the last haptic step.
+    haptic_prev: Option<Pose>,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -193,6 +196,7 @@ impl SurfaceSet {
             collider,
             substeps: options.substeps,
             before: verts.clone(),
+            was_held: Vec::new(),
             scratch: verts,
         };
         if let Some(i) = self.entries.iter().position(|e| e.1.is_none()) {
@@ -258,6 +262,7 @@ impl SurfaceSet {
                 prev: None,
                 reaction: ToolReaction::default(),
                 applied: (Vector::ZERO, Vector::ZERO),
+                haptic_prev: None,
             },
         );
     }
@@ -270,6 +275,58 @@ impl SurfaceSet {
     /// The reaction on `tool` after the last step.
     pub fn tool_reaction(&self, tool: ColliderHandle) -> Option<ToolReaction> {
         self.tools.get(&tool).map(|t| t.reaction)
+    }
+
+    /// The haptic path: puts `tool` at the device pose `device` (world), steps every surface
+    /// once at its own time step with that tool moving from its last haptic pose (the other
+    /// tools stay where they are), and returns the tool's reaction. No rigid step and no
+    /// collider update: call it at the device's rate (1 kHz and more) between
+    /// [`SurfaceSet::step`]s, which keep the rest of the scene going.
+    pub fn haptic_step(
+        &mut self,
+        world: &PhysicsWorld,
+        tool: ColliderHandle,
+        device: Pose,
+    ) -> Option<ToolReaction> {
+        if !device.is_finite() || !world.colliders.contains(tool) {
+            return None;
+        }
+        let state = self.tools.get_mut(&tool)?;
+        let start = state.haptic_prev.unwrap_or(device);
+        state.haptic_prev = Some(device);
+        let others: Vec<(ColliderHandle, Pose, Pose)> = self
+            .tools
+            .keys()
+            .filter(|h| **h != tool)
+            .filter_map(|h| {
+                let p = *world.colliders.get(*h)?.position();
+                Some((*h, p, p))
+            })
+            .chain(std::iter::once((tool, start, device)))
+            .collect();
+        let mut total = ToolReaction::default();
+        for (_, entry) in self.entries.iter_mut() {
+            let Some(s) = entry.as_mut() else {
+                continue;
+            };
+            let Some(body) = world.bodies.get(s.body) else {
+                continue;
+            };
+            let body_pose = *body.position();
+            let h = s.surface.dt();
+            for (th, r) in surface_substep(s, world, &body_pose, &others, h) {
+                if th == tool {
+                    total.force += r.force;
+                    total.torque += r.torque;
+                    total.mean_force += r.force;
+                    total.held_vertices += r.held_vertices;
+                }
+            }
+        }
+        if let Some(state) = self.tools.get_mut(&tool) {
+            state.reaction = total;
+        }
+        Some(total)
     }
 
     /// Steps rapier, then every surface (see the type's docs).
@@ -319,47 +376,24 @@ impl SurfaceSet {
                 continue;
             };
             let body_pose = *body.position();
-            let inv = body_pose.inverse();
             let n = s.substeps.max(1);
+            let h = dt / n as Real;
             for k in 1..=n {
                 let a = k as Real / n as Real;
                 let a_prev = (k - 1) as Real / n as Real;
-                s.surface.positions_into(&mut s.before);
-                s.surface.step();
-                s.surface.release_all();
-                for (th, p0, p1) in &tool_list {
-                    let Some(tool) = world.colliders.get(*th) else {
-                        continue;
-                    };
-                    let pose = inv * lerp_pose(p0, p1, a);
-                    let before = inv * lerp_pose(p0, p1, a_prev);
-                    let h = dt / n as Real;
-                    let (force, torque_arm_sum, held) = hold_vertices(
-                        &mut s.surface,
-                        tool.shape(),
-                        &pose,
-                        &before,
-                        h,
-                        &s.before,
-                        &mut s.scratch,
-                    );
-                    let world_force = body_pose.rotation * force;
-                    let centre = world
-                        .bodies
-                        .get(tool.parent().unwrap_or(RigidBodyHandle::invalid()))
-                        .map(|b| b.center_of_mass())
-                        .unwrap_or(p1.translation);
-                    // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
-                    let torque = body_pose.rotation * torque_arm_sum
-                        - (centre - body_pose.translation).cross(world_force);
-                    let m = mean.entry(*th).or_insert((Vector::ZERO, Vector::ZERO));
-                    m.0 += world_force / n as Real;
-                    m.1 += torque / n as Real;
+                let poses: Vec<(ColliderHandle, Pose, Pose)> = tool_list
+                    .iter()
+                    .map(|(th, p0, p1)| (*th, lerp_pose(p0, p1, a_prev), lerp_pose(p0, p1, a)))
+                    .collect();
+                for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {
+                    let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
+                    m.0 += r.force / n as Real;
+                    m.1 += r.torque / n as Real;
                     if k == n {
-                        if let Some(t) = self.tools.get_mut(th) {
-                            t.reaction.force += world_force;
-                            t.reaction.torque += torque;
-                            t.reaction.held_vertices += held;
+                        if let Some(t) = self.tools.get_mut(&th) {
+                            t.reaction.force += r.force;
+                            t.reaction.torque += r.torque;
+                            t.reaction.held_vertices += r.held_vertices;
                         }
                     }
                 }
@@ -401,6 +435,59 @@ impl SurfaceSet {
     }
 }
 
+/// One surface substep: the surface steps, then each tool (poses in world, at the start and the
+/// end of the substep) holds the vertices it contains. Returns each tool's reaction (world).
+fn surface_substep(
+    s: &mut AttachedSurface,
+    world: &PhysicsWorld,
+    body_pose: &Pose,
+    tools: &[(ColliderHandle, Pose, Pose)],
+    h: Real,
+) -> Vec<(ColliderHandle, ToolReaction)> {
+    let inv = body_pose.inverse();
+    s.surface.positions_into(&mut s.before);
+    s.surface.step();
+    s.was_held.clear();
+    s.was_held
+        .extend((0..s.surface.num_vertices() as u32).map(|i| s.surface.is_held(i)));
+    s.surface.release_all();
+    let mut out = Vec::with_capacity(tools.len());
+    for (th, start, end) in tools {
+        let Some(tool) = world.colliders.get(*th) else {
+            continue;
+        };
+        let (force, arm_sum, held) = hold_vertices(
+            &mut s.surface,
+            tool.shape(),
+            &(inv * *end),
+            &(inv * *start),
+            h,
+            &s.before,
+            &s.was_held,
+            &mut s.scratch,
+        );
+        let world_force = body_pose.rotation * force;
+        let centre = tool
+            .parent()
+            .and_then(|b| world.bodies.get(b))
+            .map(|b| b.center_of_mass())
+            .unwrap_or(end.translation);
+        // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
+        let torque =
+            body_pose.rotation * arm_sum - (centre - body_pose.translation).cross(world_force);
+        out.push((
+            *th,
+            ToolReaction {
+                force: world_force,
+                torque,
+                mean_force: world_force,
+                held_vertices: held,
+            },
+        ));
+    }
+    out
+}
+
 fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
     Pose::from_parts(
         a.translation.lerp(b.translation, t),
@@ -408,13 +495,15 @@ fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
     )
 }
 
-/// Moves every surface vertex the tool contains out of it and holds it there with the tool's
-/// velocity; returns the force the held vertices push the tool with, `Σ p × f` (surface frame)
-/// and how many vertices it holds.
+/// Moves every surface vertex the tool contains out of it and holds it there; returns the force
+/// the held vertices push the tool with, `Σ p × f` (surface frame) and how many vertices it
+/// holds.
 ///
-/// The way out is the vertex's inverse trajectory relative to the tool (eq. 1-2 for one
-/// vertex): from where it is, back along its own motion over the substep minus the tool's,
-/// to the tool's boundary. With no relative motion, the nearest boundary point.
+/// A vertex that just entered is walked back along its inverse trajectory relative to the tool
+/// (eq. 1-2 for one vertex): from where it is, back along its own motion over the substep minus
+/// the tool's, to the tool's boundary. A vertex already in contact slides: it is snapped to the
+/// nearest boundary point. The contact is frictionless: a held vertex keeps its own tangential
+/// velocity and takes the tool's normal velocity.
 #[allow(clippy::too_many_arguments)]
 fn hold_vertices(
     surface: &mut MassSpringSurface,
@@ -423,33 +512,31 @@ fn hold_vertices(
     before: &Pose,
     h: Real,
     prev_positions: &[Vector],
+    was_held: &[bool],
     scratch: &mut Vec<Vector>,
 ) -> (Vector, Vector, usize) {
     let aabb: Aabb = shape.compute_aabb(pose);
     let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
+    let margin = 1e-6 * (1.0 + aabb.extents().max_element());
     let motion = pose.translation - before.translation;
+    let tool_velocity = if h > 0.0 { motion / h } else { Vector::ZERO };
     surface.positions_into(scratch);
     let mut held = Vec::new();
     for (i, p) in scratch.iter().enumerate() {
-        if !aabb.contains_local_point(*p)
-            || surface.is_pinned(i as u32)
-            || surface.is_held(i as u32)
-        {
+        let iu = i as u32;
+        if !aabb.contains_local_point(*p) || surface.is_pinned(iu) || surface.is_held(iu) {
             continue;
         }
         // In contact: inside the tool, or on its boundary (where the last substep left a held
         // vertex) within a hair.
-        let margin = 1e-6 * (1.0 + aabb.extents().max_element());
         if shape.distance_to_point(pose, *p, true) > margin {
             continue;
         }
+        let nearest = shape.project_point(pose, *p, false).point;
         let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
         let rel = motion - own;
-        let nearest = shape.project_point(pose, *p, false).point;
-        // Only a vertex that can have entered during this substep (relative motion longer than
-        // its depth) is walked back along it; one that moved with the tool stays on the
-        // boundary and is only snapped to it.
-        let out = if rel.length() > (nearest - *p).length() + margin {
+        let entering = !was_held.get(i).copied().unwrap_or(false);
+        let out = if entering && rel.length() > (nearest - *p).length() + margin {
             let d = rel.normalize();
             shape
                 .cast_ray(pose, &Ray::new(*p, d), Real::MAX, false)
@@ -457,11 +544,16 @@ fn hold_vertices(
         } else {
             nearest
         };
-        // The tool's velocity at the vertex (translation only over the substep).
-        let v = if h > 0.0 { motion / h } else { Vector::ZERO };
-        if out.is_finite() && surface.set_state(i as u32, out, v).is_ok() {
-            let _ = surface.hold(i as u32);
-            held.push(i as u32);
+        // Frictionless: the tool sets the normal velocity only.
+        let n = (out - *p)
+            .try_normalize()
+            .or_else(|| (out - pose.translation).try_normalize())
+            .unwrap_or(Vector::Y);
+        let v_own = surface.velocity(iu);
+        let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
+        if out.is_finite() && surface.set_state(iu, out, v).is_ok() {
+            let _ = surface.hold(iu);
+            held.push(iu);
         }
     }
     // Contact only pushes: a held vertex whose springs pull it into the tool (it would stick
