@@ -305,14 +305,7 @@ impl SurfaceSet {
             .chain(std::iter::once((tool, start, device)))
             .collect();
         let mut total = ToolReaction::default();
-        for (_, entry) in self.entries.iter_mut() {
-            let Some(s) = entry.as_mut() else {
-                continue;
-            };
-            let Some(body) = world.bodies.get(s.body) else {
-                continue;
-            };
-            let body_pose = *body.position();
+        for (s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let h = s.surface.dt();
             for (th, r) in surface_substep(s, world, &body_pose, &others, h) {
                 if th == tool {
@@ -368,14 +361,7 @@ impl SurfaceSet {
             })
             .collect();
         let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
-        for (_, entry) in self.entries.iter_mut() {
-            let Some(s) = entry.as_mut() else {
-                continue;
-            };
-            let Some(body) = world.bodies.get(s.body) else {
-                continue;
-            };
-            let body_pose = *body.position();
+        for (s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
             let h = dt / n as Real;
             for k in 1..=n {
@@ -398,6 +384,12 @@ impl SurfaceSet {
                     }
                 }
             }
+        }
+        // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step).
+        for (_, entry) in self.entries.iter_mut() {
+            let Some(s) = entry.as_mut() else {
+                continue;
+            };
             if let Some(ch) = s.collider {
                 s.surface.positions_into(&mut s.scratch);
                 if let Some(c) = world.colliders.get_mut(ch) {
@@ -433,6 +425,18 @@ impl SurfaceSet {
             }
         }
     }
+}
+
+/// The attached surfaces whose body is still in the world, with that body's pose.
+fn attached_with_pose<'a>(
+    entries: &'a mut [(u32, Option<AttachedSurface>)],
+    world: &'a PhysicsWorld,
+) -> impl Iterator<Item = (&'a mut AttachedSurface, Pose)> + 'a {
+    entries.iter_mut().filter_map(move |(_, e)| {
+        let s = e.as_mut()?;
+        let pose = *world.bodies.get(s.body)?.position();
+        Some((s, pose))
+    })
 }
 
 /// One surface substep: the surface steps, then each tool (poses in world, at the start and the
