@@ -184,6 +184,15 @@ impl Frame {
     pub fn moving_point(&self, p: Vector) -> DVec3 {
         self.rot * p.as_dvec3() + self.tra
     }
+    /// The moving mesh's pose in the fixed frame, in `f32` (for parry's boxes).
+    pub fn pose12(&self) -> Pose {
+        Pose::from_parts(self.tra.as_vec3(), self.rot.as_quat())
+    }
+    /// How much the `f32` bounding boxes are loosened so that no touch within the tolerance
+    /// is pruned.
+    pub fn box_margin(&self, fixed: &TouchMesh, moving: &TouchMesh) -> Real {
+        (self.tol as Real) * 4.0 + 1e-6 * fixed.scale().max(moving.scale())
+    }
 }
 
 fn dpose(p: &Pose) -> (DQuat, DVec3) {
@@ -377,10 +386,10 @@ impl Reconstructor {
         let ws = &mut self.ws;
         ws.pairs.clear();
         ws.events.clear();
-        let pos12 = Pose::from_parts(fr.tra.as_vec3(), fr.rot.as_quat());
+        let pos12 = fr.pose12();
         let u = fr.u.as_vec3();
         let tol = fr.tol;
-        let margin = (tol as Real) * 4.0 + 1e-6 * fixed.scale().max(moving.scale());
+        let margin = fr.box_margin(fixed, moving);
         // Seed the bound with a touch that surely exists: each object's vertex deepest along
         // the motion, cast back along the trajectory. Less a margin that covers f32 rounding,
         // it is a lower bound of the first touch.
@@ -440,9 +449,9 @@ impl Reconstructor {
         let ws = &mut self.ws;
         ws.pairs.clear();
         ws.events.clear();
-        let pos12 = Pose::from_parts(fr.tra.as_vec3(), fr.rot.as_quat());
+        let pos12 = fr.pose12();
         let u = fr.u.as_vec3();
-        let margin = (fr.tol as Real) * 4.0 + 1e-6 * (fixed.scale().max(moving.scale()));
+        let margin = fr.box_margin(fixed, moving);
         let (a, b) = (-(s_min as Real) * u, -(s_max as Real) * u);
         let swept = |aabb: Aabb| -> Aabb {
             let m = aabb.transform_by(&pos12);
@@ -606,7 +615,7 @@ impl Reconstructor {
             }
         }
         let pos12 = Pose::from_parts((fr.tra + shift).as_vec3(), fr.rot.as_quat());
-        let margin = (fr.tol as Real) * 4.0 + 1e-6 * fixed.scale().max(moving.scale());
+        let margin = fr.box_margin(fixed, moving);
         let overlap = |nf: &BvhNode, nm: &BvhNode| {
             nm.aabb()
                 .transform_by(&pos12)
@@ -861,7 +870,7 @@ impl BoxTransform {
 /// mesh's box.
 fn aabb_overlap_range(fixed: &TouchMesh, moving: &TouchMesh, fr: &Frame) -> Option<(f64, f64)> {
     let f = fixed.local_aabb();
-    let pos12 = Pose::from_parts(fr.tra.as_vec3(), fr.rot.as_quat());
+    let pos12 = fr.pose12();
     let m = moving.local_aabb().transform_by(&pos12);
     let pad = fr.tol * 4.0 + 1e-5 * (f.extents().length() as f64).max(1e-12);
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
