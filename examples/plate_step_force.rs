@@ -92,18 +92,22 @@ fn diverged(s: &MassSpringSurface) -> bool {
     !s.is_finite() || !s.max_displacement().is_finite() || !s.total_energy().is_finite()
 }
 
+/// The plate of regime `r`: rim pinned, 1 g per vertex, dt = 1/60 s.
+fn plate_builder(planar: &PlanarMesh, r: &Regime) -> MassSpringSurfaceBuilder {
+    MassSpringSurfaceBuilder::from_mesh(&planar.mesh)
+        .stiffness(r.k)
+        .damping(r.c)
+        .mass(MassDistribution::PerVertex(MASS))
+        .pinned(planar.boundary.iter().copied())
+        .dt(DT)
+}
+
 fn build(planar: &PlanarMesh, loaded: &[u32], r: &Regime, i: Integrator) -> MassSpringSurface {
-    let mut s =
-        MassSpringSurfaceBuilder::new(planar.mesh.vertices.clone(), planar.mesh.triangles.clone())
-            .stiffness(r.k)
-            .damping(r.c)
-            .mass(MassDistribution::PerVertex(MASS))
-            .pinned(planar.boundary.iter().copied())
-            .dt(DT)
-            .integrator(i)
-            .neighbour_max_error(Real::INFINITY)
-            .build()
-            .expect("valid plate");
+    let mut s = plate_builder(planar, r)
+        .integrator(i)
+        .neighbour_max_error(Real::INFINITY)
+        .build()
+        .expect("valid plate");
     s.add_force_schedule(
         loaded.to_vec(),
         ForceProfile::Step {
@@ -208,16 +212,10 @@ fn run(planar: &PlanarMesh, loaded: &[u32], r: &Regime) -> Vec<Run> {
             );
         }
     }
-    let default_limit =
-        MassSpringSurfaceBuilder::new(planar.mesh.vertices.clone(), planar.mesh.triangles.clone())
-            .stiffness(r.k)
-            .damping(r.c)
-            .mass(MassDistribution::PerVertex(MASS))
-            .pinned(planar.boundary.iter().copied())
-            .dt(DT)
-            .integrator(Integrator::NEIGHBOUR)
-            .build()
-            .expect("valid plate");
+    let default_limit = plate_builder(planar, r)
+        .integrator(Integrator::NEIGHBOUR)
+        .build()
+        .expect("valid plate");
     println!(
         "with the default neighbour_max_error the neighbour integrator falls back to the exact \
          filter: {}",
