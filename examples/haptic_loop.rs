@@ -89,8 +89,13 @@ fn main() {
     let achieved = steps as f64 / elapsed;
     assert!(max_force > 0.01, "the tool pressed the plate");
     assert!(last.length() < 1e-6, "lifted off: no force left");
-    // The jump is reported, not asserted: a vertex entering or leaving the tool changes the
-    // force at once (position-based contact on a mesh of 11 mm spacing).
+    // Vertices stay in contact while the tool turns back (they are released only when their
+    // springs pull them off the tool), so the force is continuous: steps of the tremor's
+    // slope, not whole vertices' worth of force.
+    assert!(
+        max_jump < 0.1 * max_force,
+        "force jumps {max_jump} N of {max_force} N"
+    );
     println!(
         "max force {max_force:.4} N; largest jump {:.1} % of it",
         100.0 * max_jump / max_force

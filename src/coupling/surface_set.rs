@@ -117,9 +117,13 @@ struct ToolState {
 /// tools' poses are interpolated between the start and the end of the rigid step, expressed in
 /// the surface body's frame, and every surface vertex a tool contains is moved out along the
 /// tool's own motion over the substep (the vertex form of the inverse trajectory mapping, eq.
-/// 1-2), or to the nearest tool surface point when the tool did not move; it takes the tool's
-/// velocity. The filter then spreads that deformation over the next substep. The reaction on a
-/// tool is the sum of the spring and damper forces of the vertices it holds. Dynamic tools
+/// 1-2), or to the nearest tool surface point when the tool did not move. The contact is
+/// frictionless: the vertex takes the tool's normal velocity and is held along the tool's
+/// normal only ([`MassSpringSurface::hold_sliding`]), so it slides over the tool under the
+/// tangential part of its forces. A held vertex stays in contact when the tool slows down or
+/// turns back (it is snapped back onto the tool) until its springs pull it away from the tool.
+/// The filter then spreads that deformation over the next substep. The reaction on a tool is
+/// the sum of the normal parts of the spring and damper forces of the vertices it holds. Dynamic tools
 /// carry the substep-averaged reaction as a rapier force through the next rigid step (one step
 /// of lag),
 /// and surface colliders are updated once per rigid step (`TriMesh::set_vertices`, a BVH
@@ -523,23 +527,34 @@ fn hold_vertices(
     let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
     let margin = 1e-6 * (1.0 + aabb.extents().max_element());
     let motion = pose.translation - before.translation;
-    let tool_velocity = if h > 0.0 { motion / h } else { Vector::ZERO };
     surface.positions_into(scratch);
+    // A vertex held in the last substep moved on with the tool's old normal velocity; when the
+    // tool slowed down or turned back, that leaves it outside by up to the relative motion over
+    // the substep. It is still in contact (and snapped back) unless its springs pull it away
+    // (the push-only test below), so the look-up box covers that gap.
+    let reach = 2.0 * motion.length() + margin;
+    let outer = aabb.loosened(reach);
     let mut held = Vec::new();
+    // (vertex, its free position and velocity) for vertices that followed the tool.
+    let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
     for (i, p) in scratch.iter().enumerate() {
         let iu = i as u32;
-        if !aabb.contains_local_point(*p) || surface.is_pinned(iu) || surface.is_held(iu) {
+        if !outer.contains_local_point(*p) || surface.is_pinned(iu) || surface.is_held(iu) {
             continue;
         }
-        // In contact: inside the tool, or on its boundary (where the last substep left a held
-        // vertex) within a hair.
-        if shape.distance_to_point(pose, *p, true) > margin {
-            continue;
-        }
-        let nearest = shape.project_point(pose, *p, false).point;
+        let entering = !was_held.get(i).copied().unwrap_or(false);
         let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
         let rel = motion - own;
-        let entering = !was_held.get(i).copied().unwrap_or(false);
+        // In contact: inside the tool, or on its boundary (where the last substep left a held
+        // vertex) within a hair, or held before and left behind by the relative motion.
+        let gap = shape.distance_to_point(pose, *p, true);
+        if gap > margin {
+            if entering || gap > rel.length() + reach {
+                continue;
+            }
+            followed.push((iu, *p, surface.velocity(iu)));
+        }
+        let nearest = shape.project_point(pose, *p, false).point;
         let out = if entering && rel.length() > (nearest - *p).length() + margin {
             let d = rel.normalize();
             shape
@@ -548,33 +563,52 @@ fn hold_vertices(
         } else {
             nearest
         };
-        // Frictionless: the tool sets the normal velocity only.
-        let n = (out - *p)
-            .try_normalize()
+        if !out.is_finite() {
+            continue;
+        }
+        // The tool's outward normal at the contact point.
+        let local = pose.inverse_transform_point(out);
+        let (proj, feature) = shape.project_local_point_and_get_feature(local);
+        let n = shape
+            .feature_normal_at_point(0, feature, proj.point)
+            .map(|n| pose.rotation * n)
+            .filter(|n| n.is_finite())
+            .or_else(|| (out - *p).try_normalize())
             .or_else(|| (out - pose.translation).try_normalize())
             .unwrap_or(Vector::Y);
+        // Frictionless: the tool sets the normal velocity only (that of the tool's material
+        // point under the vertex, rotation included).
+        let tool_velocity = if h > 0.0 {
+            (out - before.transform_point(local)) / h
+        } else {
+            Vector::ZERO
+        };
         let v_own = surface.velocity(iu);
         let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
-        if out.is_finite() && surface.set_state(iu, out, v).is_ok() {
-            let _ = surface.hold(iu);
-            held.push(iu);
+        if surface.set_state(iu, out, v).is_ok() {
+            let _ = surface.hold_sliding(iu, n);
+            held.push((iu, n));
         }
     }
-    // Contact only pushes: a held vertex whose springs pull it into the tool (it would stick
-    // to a receding tool) is let go.
+    // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
+    // stick to a receding tool) is let go. The tool receives the normal part of the others'
+    // spring and damper forces (the tangential part slides them).
     let mut force = Vector::ZERO;
     let mut moment = Vector::ZERO;
     let mut count = 0;
-    for &i in &held {
-        let f = surface.internal_force(i);
-        let p = surface.position(i);
-        let inward = pose.translation - p;
-        if f.dot(inward) < 0.0 {
+    for &(i, n) in &held {
+        let f = surface.internal_force(i).dot(n);
+        if f >= 0.0 {
             surface.release(i);
+            // A vertex that only followed the tool separates where its own motion took it.
+            if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
+                let _ = surface.set_state(i, p, v);
+            }
             continue;
         }
+        let f = n * f;
         force += f;
-        moment += p.cross(f);
+        moment += surface.position(i).cross(f);
         count += 1;
     }
     (force, moment, count)

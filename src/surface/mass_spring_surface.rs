@@ -466,6 +466,7 @@ impl MassSpringSurfaceBuilder {
             vertex_edge_ptr: Vec::new(),
             vertex_edges: Vec::new(),
             held: vec![false; n],
+            held_normal: vec![DVec3::ZERO; n],
             any_held: false,
         };
         s.build_vertex_edges();
@@ -533,6 +534,8 @@ pub struct MassSpringSurface {
     vertex_edge_ptr: Vec<usize>,
     vertex_edges: Vec<u32>,
     held: Vec<bool>,
+    /// For a sliding hold, the unit normal the holder supports; zero for a full hold.
+    held_normal: Vec<DVec3>,
     any_held: bool,
 }
 
@@ -837,8 +840,36 @@ impl MassSpringSurface {
     pub fn hold(&mut self, i: u32) -> Result<(), SurfaceError> {
         self.check_vertex(i)?;
         self.held[i as usize] = true;
+        self.held_normal[i as usize] = DVec3::ZERO;
         self.any_held = true;
         Ok(())
+    }
+
+    /// Holds vertex `i` along `normal` only, until [`MassSpringSurface::release_all`]: a
+    /// frictionless contact. The holder balances the normal part of the vertex's force and
+    /// velocity change; the tangential part moves it as usual, so it slides along the holder.
+    /// A zero or non-finite `normal` gives a full [`MassSpringSurface::hold`].
+    ///
+    /// # Errors
+    /// [`SurfaceError::VertexOutOfRange`].
+    pub fn hold_sliding(&mut self, i: u32, normal: Vector) -> Result<(), SurfaceError> {
+        self.hold(i)?;
+        if let Some(n) = normal.as_dvec3().try_normalize() {
+            self.held_normal[i as usize] = n;
+        }
+        Ok(())
+    }
+
+    /// The part of `v` (a force or a velocity change of vertex `i`) its holder leaves free.
+    fn unheld_part(&self, i: usize, v: DVec3) -> DVec3 {
+        if !self.held[i] {
+            return v;
+        }
+        let n = self.held_normal[i];
+        if n == DVec3::ZERO {
+            return DVec3::ZERO;
+        }
+        v - n * v.dot(n)
     }
     /// Releases vertex `i` if held.
     pub fn release(&mut self, i: u32) {
@@ -970,10 +1001,8 @@ impl MassSpringSurface {
             }
         }
         if self.any_held {
-            for (f, h) in self.force.iter_mut().zip(&self.held) {
-                if *h {
-                    *f = DVec3::ZERO;
-                }
+            for i in 0..self.force.len() {
+                self.force[i] = self.unheld_part(i, self.force[i]);
             }
         }
     }
@@ -1111,13 +1140,6 @@ impl MassSpringSurface {
             return;
         };
         filter.apply(&self.rhs, &mut self.dv);
-        if self.any_held {
-            for (dv, &v) in self.dv.iter_mut().zip(&self.free) {
-                if self.held[v as usize] {
-                    *dv = DVec3::ZERO;
-                }
-            }
-        }
         if self.free.len() == self.home.len()
             && matches!(filter.kind(), FilterKind::Neighbour { .. })
         {
@@ -1134,9 +1156,11 @@ impl MassSpringSurface {
             self.dv.iter_mut().for_each(|dv| *dv += gamma);
         }
         let mut probe = 0.0;
-        for (dv, &v) in self.dv.iter().zip(&self.free) {
+        for (fi, &v) in self.free.iter().enumerate() {
             let i = v as usize;
-            self.vel[i] += *dv;
+            // A held vertex keeps the holder's normal velocity.
+            let dv = self.unheld_part(i, self.dv[fi]);
+            self.vel[i] += dv;
             self.pos[i] += self.vel[i] * dt;
             probe += self.pos[i].element_sum();
         }
@@ -1251,7 +1275,8 @@ impl MassSpringSurface {
         let mut probe = 0.0;
         for (fi, &v) in self.free.iter().enumerate() {
             let i = v as usize;
-            self.vel[i] += x[fi];
+            let dv = self.unheld_part(i, x[fi]);
+            self.vel[i] += dv;
             self.pos[i] += self.vel[i] * dt;
             probe += self.pos[i].element_sum();
         }

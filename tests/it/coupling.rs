@@ -354,3 +354,42 @@ fn removing_a_tool_or_the_surface_mid_run_works() {
         set.step(&mut world);
     }
 }
+
+#[test]
+fn haptic_force_is_continuous_when_the_tool_turns_back() {
+    // A tool pressing in with a tremor turns back every half period; the vertices it holds
+    // must stay in contact (no force drop to zero) and its force must not drift.
+    let (mut world, mut set, _) = world_with_plate(17);
+    let c = Vector::new(0.5, 0.0, 0.5);
+    let r = 0.02;
+    let (_, tool) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, r);
+    let rate = 60.0 * 17.0;
+    let device = |t: f32| {
+        let depth = (t / 0.5).min(1.0) * 0.01 + 0.002 * (std::f32::consts::TAU * 2.0 * t).sin();
+        Pose::from_translation(c + Vector::Y * (r - depth))
+    };
+    let (mut last, mut max_jump, mut max_force) = (Vector::ZERO, 0.0f32, 0.0f32);
+    let mut at_phase = Vec::new();
+    for k in 0..(3.0 * rate) as usize {
+        let t = k as f32 / rate;
+        let f = set.haptic_step(&world, tool, device(t)).unwrap().force;
+        if t > 0.6 {
+            assert!(f.y > 0.0, "lost contact at t = {t}");
+            max_jump = max_jump.max((f - last).length());
+        }
+        if k >= 1020 && k % 510 == 0 {
+            at_phase.push(f.y);
+        }
+        max_force = max_force.max(f.length());
+        last = f;
+    }
+    assert!(
+        max_jump < 0.05 * max_force,
+        "largest jump {max_jump} N of {max_force} N"
+    );
+    // Same phase of the tremor, same force.
+    let (lo, hi) = at_phase
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), y| (a.min(*y), b.max(*y)));
+    assert!(hi - lo < 0.01 * hi, "force drifts: {at_phase:?}");
+}

@@ -453,3 +453,56 @@ fn neighbour_filter_without_fallback_is_stable_at_s_5() {
         exact.max_displacement()
     );
 }
+
+#[test]
+fn a_sliding_hold_keeps_the_normal_and_frees_the_tangent() {
+    for integrator in [
+        Integrator::ExplicitEuler,
+        Integrator::EXACT,
+        Integrator::NEIGHBOUR,
+        Integrator::BARAFF_WITKIN,
+    ] {
+        let (v, t) = grid(6, 6, 1.0);
+        let mut s = MassSpringSurfaceBuilder::new(v, t)
+            .stiffness(200.0)
+            .damping(0.5)
+            .mass(MassDistribution::PerVertex(0.02))
+            .pinned([0, 6, 42, 48])
+            .dt(1.0 / 600.0)
+            .integrator(integrator)
+            .build()
+            .unwrap();
+        let home = s.home(24);
+        s.set_state(24, home + Vector::new(0.1, -0.1, 0.0), Vector::ZERO)
+            .unwrap();
+        // Held along y only (a frictionless floor under the vertex): it slides back over x
+        // and z while y stays where the holder put it.
+        s.hold_sliding(24, Vector::Y).unwrap();
+        for _ in 0..6000 {
+            s.step();
+        }
+        let p = s.position(24);
+        assert!(
+            (p.y - (home.y - 0.1)).abs() < 1e-5,
+            "{integrator:?}: y {}",
+            p.y
+        );
+        assert!(
+            (p.x - home.x).abs() < 2e-3 && (p.z - home.z).abs() < 2e-3,
+            "{integrator:?}: slid to {p:?}, home {home:?}"
+        );
+        // What the holder carries is normal: no tangential force is left at rest.
+        let f = s.internal_force(24);
+        assert!(f.y > 0.0 && f.x.abs() < 2e-2 * f.y && f.z.abs() < 2e-2 * f.y);
+        // A full hold keeps the tangential offset.
+        s.release_all();
+        s.set_state(24, home + Vector::new(0.1, -0.1, 0.0), Vector::ZERO)
+            .unwrap();
+        s.hold(24).unwrap();
+        for _ in 0..600 {
+            s.step();
+        }
+        let x = s.position(24).x;
+        assert!((x - (home.x + 0.1)).abs() < 1e-6, "{integrator:?}: {x}");
+    }
+}
