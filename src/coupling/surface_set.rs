@@ -46,7 +46,8 @@ pub struct AttachOptions {
     /// step becomes the world's `dt / substeps`. Default 1.
     pub substeps: u32,
     /// Give the body a TriMesh collider that follows the deformed surface (updated once per
-    /// rigid step). Default `true`.
+    /// rigid step). It adds no mass to the body (the surface's masses are its own): give a
+    /// dynamic body its mass through its other colliders or `additional_mass`. Default `true`.
     pub collider: bool,
 }
 
@@ -189,6 +190,10 @@ impl SurfaceSet {
                     Group::ALL,
                     Default::default(),
                 ))
+                // The surface's inertia is its own lumped masses: the collider adds none to
+                // the body, and rapier does not integrate the deformed mesh's volume again
+                // after every update.
+                .mass_properties(parry3d::mass_properties::MassProperties::default())
                 .build();
             Some(world.insert_collider(c, Some(body)))
         } else {
@@ -459,12 +464,22 @@ fn surface_substep(
     s.was_held
         .extend((0..s.surface.num_vertices() as u32).map(|i| s.surface.is_held(i)));
     s.surface.release_all();
+    // A tool moves only the vertices it holds, which later tools skip: one read of the
+    // positions serves every tool.
+    s.surface.positions_into(&mut s.scratch);
     let mut out = Vec::with_capacity(tools.len());
     for (th, start, end) in tools {
         let Some(tool) = world.colliders.get(*th) else {
             continue;
         };
+        // Vertices follow a tool whose motion is prescribed (kinematic or no body); a dynamic
+        // tool's own motion comes from the surface's force, so it is not chased.
+        let follow = tool
+            .parent()
+            .and_then(|b| world.bodies.get(b))
+            .is_none_or(|b| !b.is_dynamic());
         let (force, arm_sum, held) = hold_vertices(
+            follow,
             &mut s.surface,
             tool.shape(),
             &(inv * *end),
@@ -472,7 +487,7 @@ fn surface_substep(
             h,
             &s.before,
             &s.was_held,
-            &mut s.scratch,
+            &s.scratch,
         );
         let world_force = body_pose.rotation * force;
         let centre = tool
@@ -514,6 +529,7 @@ fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
 /// velocity and takes the tool's normal velocity.
 #[allow(clippy::too_many_arguments)]
 fn hold_vertices(
+    follow: bool,
     surface: &mut MassSpringSurface,
     shape: &dyn parry3d::shape::Shape,
     pose: &Pose,
@@ -521,35 +537,41 @@ fn hold_vertices(
     h: Real,
     prev_positions: &[Vector],
     was_held: &[bool],
-    scratch: &mut Vec<Vector>,
+    positions: &[Vector],
 ) -> (Vector, Vector, usize) {
     let aabb: Aabb = shape.compute_aabb(pose);
     let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
     let margin = 1e-6 * (1.0 + aabb.extents().max_element());
     let motion = pose.translation - before.translation;
-    surface.positions_into(scratch);
     // A vertex held in the last substep moved on with the tool's old normal velocity; when the
     // tool slowed down or turned back, that leaves it outside by up to the relative motion over
     // the substep. It is still in contact (and snapped back) unless its springs pull it away
-    // (the push-only test below), so the look-up box covers that gap.
-    let reach = 2.0 * motion.length() + margin;
-    let outer = aabb.loosened(reach);
+    // (the push-only test below).
     let mut held = Vec::new();
     // (vertex, its free position and velocity) for vertices that followed the tool.
     let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
-    for (i, p) in scratch.iter().enumerate() {
+    for (i, p) in positions.iter().enumerate() {
         let iu = i as u32;
-        if !outer.contains_local_point(*p) || surface.is_pinned(iu) || surface.is_held(iu) {
+        let entering = !was_held.get(i).copied().unwrap_or(false);
+        let chase = follow && !entering;
+        let slack = if !chase {
+            0.0
+        } else {
+            let own = prev_positions.get(i).map_or(0.0, |q| (*p - *q).length());
+            own + 2.0 * motion.length() + margin
+        };
+        let near = p.cmpge(aabb.mins - Vector::splat(slack)).all()
+            && p.cmple(aabb.maxs + Vector::splat(slack)).all();
+        if !near || surface.is_pinned(iu) || surface.is_held(iu) {
             continue;
         }
-        let entering = !was_held.get(i).copied().unwrap_or(false);
         let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
         let rel = motion - own;
         // In contact: inside the tool, or on its boundary (where the last substep left a held
         // vertex) within a hair, or held before and left behind by the relative motion.
         let gap = shape.distance_to_point(pose, *p, true);
         if gap > margin {
-            if entering || gap > rel.length() + reach {
+            if !chase || gap > rel.length() + motion.length() + margin {
                 continue;
             }
             followed.push((iu, *p, surface.velocity(iu)));

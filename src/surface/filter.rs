@@ -204,6 +204,8 @@ pub(crate) enum Filter {
     Exact {
         llt: faer::sparse::linalg::solvers::Llt<u32, f64>,
         rhs: Mat<f64>,
+        /// Columns of `S⁻¹` solved so far (for held vertices), dense.
+        columns: std::collections::HashMap<u32, Vec<f64>>,
     },
     Neighbour {
         p: Csr,
@@ -223,6 +225,7 @@ impl Filter {
                 Ok(Filter::Exact {
                     llt,
                     rhs: Mat::zeros(s.n, 3),
+                    columns: Default::default(),
                 })
             }
             FilterKind::Neighbour { rings } => Ok(Filter::Neighbour {
@@ -242,7 +245,7 @@ impl Filter {
     /// `out = S⁻¹ b` (exact) or its approximation.
     pub fn apply(&mut self, b: &[DVec3], out: &mut [DVec3]) {
         match self {
-            Filter::Exact { llt, rhs } => {
+            Filter::Exact { llt, rhs, .. } => {
                 for (i, v) in b.iter().enumerate() {
                     rhs[(i, 0)] = v.x;
                     rhs[(i, 1)] = v.y;
@@ -254,6 +257,63 @@ impl Filter {
                 }
             }
             Filter::Neighbour { p, .. } => p.mul_vec3(b, out),
+        }
+    }
+
+    /// Entries `rows` (sorted free indices) of column `j` into `out` (see
+    /// [`Filter::for_column`]).
+    pub fn gather(&mut self, j: u32, rows: &[u32], out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        match self {
+            Filter::Neighbour { .. } => {
+                self.for_column(j, |i, w| {
+                    if let Ok(k) = rows.binary_search(&i) {
+                        out[k] = w;
+                    }
+                });
+            }
+            Filter::Exact { .. } => {
+                let col = self.exact_column(j);
+                for (o, &r) in out.iter_mut().zip(rows) {
+                    *o = col[r as usize];
+                }
+            }
+        }
+    }
+
+    fn exact_column(&mut self, j: u32) -> &[f64] {
+        let Filter::Exact { llt, rhs, columns } = self else {
+            return &[];
+        };
+        let n = rhs.nrows();
+        if columns.len() >= (32 << 20) / (8 * n.max(1)) {
+            columns.clear();
+        }
+        columns.entry(j).or_insert_with(|| {
+            let mut e = Mat::<f64>::zeros(n, 1);
+            e[(j as usize, 0)] = 1.0;
+            llt.solve_in_place(e.as_mut());
+            (0..n).map(|i| e[(i, 0)]).collect()
+        })
+    }
+
+    /// Visits column `j` of the filter (the velocity change a unit impulse on free vertex `j`
+    /// causes, per coordinate) as `(row, value)`: the neighbour filter's own sparse row (the
+    /// filter is symmetric), or, for the exact filter, one solve, cached (dense, up to 32 MB of
+    /// columns) until the filter is rebuilt.
+    pub fn for_column(&mut self, j: u32, mut visit: impl FnMut(u32, f64)) {
+        match self {
+            Filter::Neighbour { p, .. } => {
+                let (a, b) = (p.ptr[j as usize], p.ptr[j as usize + 1]);
+                for (&i, &v) in p.idx[a..b].iter().zip(&p.val[a..b]) {
+                    visit(i, v);
+                }
+            }
+            Filter::Exact { .. } => {
+                for (i, &v) in self.exact_column(j).iter().enumerate() {
+                    visit(i as u32, v);
+                }
+            }
         }
     }
 }

@@ -830,9 +830,11 @@ impl MassSpringSurface {
     }
 
     /// Marks vertex `i` as held by something outside the surface (a tool) for the following
-    /// steps, until [`MassSpringSurface::release_all`]: the holder balances its net force, so it
-    /// neither accelerates nor passes its force on through the filter; it keeps the velocity
-    /// given by [`MassSpringSurface::set_state`]. A held vertex's
+    /// steps, until [`MassSpringSurface::release_all`]: a moving pin. It keeps the velocity
+    /// given by [`MassSpringSurface::set_state`], and the rest of the surface responds to it as
+    /// to a pin: the filtered integrators solve for the holders' impulses through the columns
+    /// of `W` at the held vertices (a small dense system per step, one extra solve per newly
+    /// held vertex for the exact filter, cached), Baraff-Witkin projects its CG. A held vertex's
     /// [`MassSpringSurface::internal_force`] is what it pushes the holder with.
     ///
     /// # Errors
@@ -1155,6 +1157,15 @@ impl MassSpringSurface {
             let gamma = (impulse - got) / total;
             self.dv.iter_mut().for_each(|dv| *dv += gamma);
         }
+        if self.any_held {
+            constrain_held(
+                filter,
+                &self.free,
+                &self.held,
+                &self.held_normal,
+                &mut self.dv,
+            );
+        }
         let mut probe = 0.0;
         for (fi, &v) in self.free.iter().enumerate() {
             let i = v as usize;
@@ -1243,17 +1254,30 @@ impl MassSpringSurface {
         cg.r.resize(nf, DVec3::ZERO);
         cg.p.resize(nf, DVec3::ZERO);
         cg.ap.resize(nf, DVec3::ZERO);
+        // Held vertices: Baraff and Witkin's filtered CG. The held directions are projected
+        // out of the iterate, the residual and the search direction, so the solution has the
+        // holder's velocity there and the rest responds to it as to a pin.
+        let project = |v: &mut [DVec3], s: &Self| {
+            if s.any_held {
+                for (fi, &i) in s.free.iter().enumerate() {
+                    v[fi] = s.unheld_part(i as usize, v[fi]);
+                }
+            }
+        };
+        project(&mut x, self);
         apply(&x, &mut cg.ap, self, &blocks);
         for i in 0..nf {
             cg.r[i] = rhs[i] - cg.ap[i];
-            cg.p[i] = cg.r[i];
         }
+        project(&mut cg.r, self);
+        cg.p.copy_from_slice(&cg.r);
         let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
         let bnorm = dot(&rhs, &rhs).sqrt().max(1e-300);
         let mut rr = dot(&cg.r, &cg.r);
         let mut it = 0;
         while it < max_iterations && rr.sqrt() > tolerance * bnorm {
             apply(&cg.p, &mut cg.ap, self, &blocks);
+            project(&mut cg.ap, self);
             let pap = dot(&cg.p, &cg.ap);
             if pap <= 0.0 || !pap.is_finite() {
                 break;
@@ -1298,5 +1322,74 @@ impl std::fmt::Debug for MassSpringSurface {
             .field("integrator", &self.integrator)
             .field("dt", &self.dt)
             .finish()
+    }
+}
+
+/// The holders' impulses in the filtered step: with `H` the held vertices' constrained
+/// directions `d` (the normal of a sliding hold, the three axes of a full hold), finds the
+/// impulses `λ` with `dᵀ (Δv + W d λ) = 0` for every constraint (a small dense system
+/// `dₐᵀ W_ab d_b λ = -dₐᵀ Δv`, the capacitance matrix of the held set) and adds `W d λ` to
+/// `Δv`. The rest of the surface then responds to the held vertices as if they were pinned
+/// where the holder puts them, at any `s`, without refactoring the filter: `W`'s columns for
+/// the held vertices are the filter's own rows (neighbour) or one cached solve each (exact).
+fn constrain_held(
+    filter: &mut Filter,
+    free: &[u32],
+    held: &[bool],
+    held_normal: &[DVec3],
+    dv: &mut [DVec3],
+) {
+    // The held free vertices, and each one's slot.
+    let list: Vec<u32> = free
+        .iter()
+        .enumerate()
+        .filter(|(_, &v)| held[v as usize])
+        .map(|(fi, _)| fi as u32)
+        .collect();
+    let h = list.len();
+    if h == 0 {
+        return;
+    }
+    // Constraints: (slot, direction).
+    let mut cons: Vec<(usize, DVec3)> = Vec::with_capacity(h);
+    for (k, &fi) in list.iter().enumerate() {
+        let n = held_normal[free[fi as usize] as usize];
+        if n == DVec3::ZERO {
+            cons.extend([DVec3::X, DVec3::Y, DVec3::Z].map(|d| (k, d)));
+        } else {
+            cons.push((k, n));
+        }
+    }
+    // W restricted to the held vertices (h × h), one column visit each.
+    let mut w_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
+    for (b, &fj) in list.iter().enumerate() {
+        filter.gather(fj, &list, w_hh.column_mut(b).as_mut_slice());
+    }
+    let m = cons.len();
+    let mut a_mat = nalgebra::DMatrix::<f64>::zeros(m, m);
+    let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+    for (a, (ka, da)) in cons.iter().enumerate() {
+        rhs[a] = -da.dot(dv[list[*ka] as usize]);
+        for (b, (kb, db)) in cons.iter().enumerate() {
+            a_mat[(a, b)] = da.dot(*db) * w_hh[(*ka, *kb)];
+        }
+    }
+    let lambda = match a_mat.clone().cholesky() {
+        Some(ch) => ch.solve(&rhs),
+        None => match a_mat.lu().solve(&rhs) {
+            Some(x) => x,
+            None => return,
+        },
+    };
+    if !lambda.iter().all(|x| x.is_finite()) {
+        return;
+    }
+    let mut impulse = vec![DVec3::ZERO; h];
+    for (c, (k, d)) in cons.iter().enumerate() {
+        impulse[*k] += *d * lambda[c];
+    }
+    for (k, &fj) in list.iter().enumerate() {
+        let j = impulse[k];
+        filter.for_column(fj, |i, w| dv[i as usize] += j * w);
     }
 }

@@ -506,3 +506,62 @@ fn a_sliding_hold_keeps_the_normal_and_frees_the_tangent() {
         assert!((x - (home.x + 0.1)).abs() < 1e-6, "{integrator:?}: {x}");
     }
 }
+
+#[test]
+fn held_vertices_act_as_pins_inside_the_filter_at_large_s() {
+    // At s ≈ 6e4 one implicit step of linear springs is a Newton step: it lands on the static
+    // solution. With a vertex held 0.1 m down, that is the Laplace solution with the held
+    // vertex as one more pin, which the holder's impulses (the capacitance solve) must give.
+    let (v, t) = grid(6, 6, 1.0);
+    let n = v.len();
+    let rim: Vec<u32> = (0..n as u32)
+        .filter(|&i| i / 7 == 0 || i / 7 == 6 || i % 7 == 0 || i % 7 == 6)
+        .collect();
+    let mut lap = DMatrix::<f64>::zeros(n, n);
+    let mut edges = std::collections::BTreeSet::new();
+    for tri in &t {
+        for k in 0..3 {
+            let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
+            edges.insert((a as usize, b as usize));
+        }
+    }
+    for &(a, b) in &edges {
+        lap[(a, a)] += 1.0;
+        lap[(b, b)] += 1.0;
+        lap[(a, b)] -= 1.0;
+        lap[(b, a)] -= 1.0;
+    }
+    let held = 16usize; // off-centre, so the answer is not symmetric
+    let known: Vec<bool> = (0..n)
+        .map(|i| rim.contains(&(i as u32)) || i == held)
+        .collect();
+    let free: Vec<usize> = (0..n).filter(|&i| !known[i]).collect();
+    let a = DMatrix::from_fn(free.len(), free.len(), |r, c| lap[(free[r], free[c])]);
+    let b = nalgebra::DVector::from_fn(free.len(), |r, _| -lap[(free[r], held)] * -0.1);
+    let x = a.lu().solve(&b).unwrap();
+    for integrator in [Integrator::EXACT, Integrator::BARAFF_WITKIN] {
+        let mut s = MassSpringSurfaceBuilder::new(v.clone(), t.clone())
+            .stiffness(1000.0)
+            .damping(0.0)
+            .mass(MassDistribution::PerVertex(0.001))
+            .pinned(rim.clone())
+            .dt(0.1)
+            .integrator(integrator)
+            .build()
+            .unwrap();
+        let home = s.home(held as u32);
+        s.set_state(held as u32, home - Vector::Y * 0.1, Vector::ZERO)
+            .unwrap();
+        s.hold(held as u32).unwrap();
+        s.step();
+        for (r, &i) in free.iter().enumerate() {
+            let y = s.displacement(i as u32).y as f64;
+            assert!(
+                (y - x[r]).abs() < 1e-3 * 0.1,
+                "{integrator:?}: vertex {i} at {y}, static {}",
+                x[r]
+            );
+        }
+        assert!((s.displacement(held as u32).y + 0.1).abs() < 1e-6);
+    }
+}

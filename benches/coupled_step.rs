@@ -1,0 +1,209 @@
+//! The coupled step (issue 5): a soft plate pinned on its rim, on a fixed rapier body, pressed
+//! by kinematic ball tools that circle while pressed in, so vertices enter, slide and leave.
+//!
+//! Timed per scene, in the same run:
+//! - `rapier_step`: vanilla `PhysicsWorld::step` of the same world (the narrow phase sees the
+//!   surface's TriMesh collider and the tools): the reference the ratios are quoted against;
+//! - `full`: one coupled step without rapier's own step — `SurfaceSet::step_with` with a rigid
+//!   step that only moves the tools: tool contacts, every surface substep, tool reactions,
+//!   forces on dynamic tools and the collider update (`TriMesh::set_vertices`, a BVH refit);
+//! - `haptic`: the haptic path, `SurfaceSet::haptic_step` for one tool (tool contacts, one
+//!   surface step, tool forces; no collider update);
+//! - `collider_update`: the collider update alone (`set_vertices` on the surface's TriMesh).
+//!
+//! Scenes (0.3 m plates, 10 N/m springs, 2 g per node, tools of 2 cm radius): 784 nodes
+//! (28 x 28, about the paper's 790) with 6 tools in a 60 Hz world with 1 surface step per
+//! rigid step (s up to about 15: the neighbour filter falls back to the exact one) and with 17
+//! (a 1 kHz surface, s ≤ 0.24, neighbour filter), and 10,000 nodes (100 x 100) with 2 tools
+//! in a 1 kHz world, 1 substep, neighbour filter. The set-up prints each scene's filter. Targets (one core): 790 nodes and 6 tools ≤ 300 µs per full
+//! step, the haptic path ≤ 50 µs, 10,000 nodes with 2 tools ≤ 1 ms.
+//!
+//! Run with `cargo bench --bench coupled_step`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::surface::meshing::plate;
+use std::time::Duration;
+
+const SIZE: f32 = 0.3;
+const R: f32 = 0.02;
+
+struct Scene {
+    world: PhysicsWorld,
+    set: SurfaceSet,
+    soft: SurfaceHandle,
+    tools: Vec<(ColliderHandle, RigidBodyHandle, Vector)>,
+    t: f32,
+}
+
+/// Where tool `k` of `n` sits at time `t`: pressed 6 mm in, circling 5 mm around its spot.
+fn tool_pose(k: usize, n: usize, centre: Vector, t: f32) -> Pose {
+    let a = t * 6.0 + k as f32 * std::f32::consts::TAU / n as f32;
+    Pose::from_translation(centre + Vector::new(0.005 * a.cos(), R - 0.006, 0.005 * a.sin()))
+}
+
+fn scene(side: u32, tools: usize, substeps: u32, dt: f32) -> Scene {
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
+    world.integration_parameters.dt = dt;
+    let ground = world.insert_body(RigidBodyBuilder::fixed());
+    let mesh = plate(SIZE, SIZE, side, side);
+    let edge = 0.5 * SIZE - 0.25 * SIZE / side as f32;
+    let rim: Vec<u32> = (0..mesh.vertices.len() as u32)
+        .filter(|&i| {
+            let v = mesh.vertices[i as usize];
+            v.x.abs() > edge || v.z.abs() > edge
+        })
+        .collect();
+    let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
+        .stiffness(10.0)
+        .damping(0.05)
+        .mass(MassDistribution::PerVertex(2e-3))
+        .pinned(rim)
+        .integrator(Integrator::NEIGHBOUR)
+        .build()
+        .expect("valid plate");
+    let mut set = SurfaceSet::new();
+    let soft = set
+        .insert(
+            surface,
+            ground,
+            &mut world,
+            AttachOptions {
+                substeps,
+                collider: true,
+            },
+        )
+        .expect("attached");
+    let spots: Vec<Vector> = (0..tools)
+        .map(|k| {
+            let a = k as f32 * std::f32::consts::TAU / tools as f32;
+            let r = if tools == 1 { 0.0 } else { 0.07 };
+            Vector::new(r * a.cos(), 0.0, r * a.sin())
+        })
+        .collect();
+    let mut handles = Vec::new();
+    for (k, c) in spots.iter().enumerate() {
+        let start = tool_pose(k, tools, *c, 0.0).translation + Vector::Y * 0.05;
+        let b = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(start));
+        let h = world.insert_collider(ColliderBuilder::ball(R), Some(b));
+        set.add_tool(h, &mut world);
+        handles.push((h, b, *c));
+    }
+    // Press the tools in through real rapier steps.
+    let press_steps = (0.5 / dt) as usize;
+    for s in 0..2 * press_steps {
+        let a = ((s + 1) as f32 / press_steps as f32).min(1.0);
+        for (k, (_, b, c)) in handles.iter().enumerate() {
+            let to = tool_pose(k, tools, *c, 0.0).translation;
+            world.bodies[*b].set_next_kinematic_translation(to + Vector::Y * 0.05 * (1.0 - a));
+        }
+        set.step(&mut world);
+    }
+    let surface = &set.get(soft).unwrap().surface;
+    println!(
+        "{} nodes, {tools} tools, {substeps} substeps of {:.3} ms: {:?}, fell back to exact: {}, s max {:.2}",
+        surface.num_vertices(),
+        surface.dt() * 1e3,
+        surface.integrator(),
+        surface.filter_fallback(),
+        surface.s_values().iter().cloned().fold(0.0, f32::max)
+    );
+    for (h, _, _) in &handles {
+        let r = set.tool_reaction(*h).unwrap();
+        assert!(
+            r.held_vertices > 0 && r.force.y > 0.0,
+            "tool pressing: {r:?} at {:?}",
+            world.colliders[*h].position().translation
+        );
+    }
+    Scene {
+        world,
+        set,
+        soft,
+        tools: handles,
+        t: 0.0,
+    }
+}
+
+impl Scene {
+    /// One coupled step with a rigid step that only moves the tools.
+    fn full_step(&mut self) {
+        self.t += self.world.integration_parameters.dt;
+        let (t, n) = (self.t, self.tools.len());
+        let tools = &self.tools;
+        self.set.step_with(&mut self.world, |w| {
+            for (k, (h, _, c)) in tools.iter().enumerate() {
+                w.colliders[*h].set_position(tool_pose(k, n, *c, t));
+            }
+        });
+    }
+
+    /// Vanilla rapier's step of the same world, the tools driven along their paths.
+    fn rapier_step(&mut self) {
+        self.t += self.world.integration_parameters.dt;
+        let n = self.tools.len();
+        for (k, (_, b, c)) in self.tools.iter().enumerate() {
+            self.world.bodies[*b].set_next_kinematic_position(tool_pose(k, n, *c, self.t));
+        }
+        self.world.step();
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let mut g = c.benchmark_group("coupled_step");
+    g.sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    for (name, side, tools, substeps, dt) in [
+        ("784n_6tools_60hz", 27u32, 6usize, 1u32, 1.0 / 60.0),
+        ("784n_6tools_60hz_17sub", 27, 6, 17, 1.0 / 60.0),
+        ("10kn_2tools_1khz", 99, 2, 1, 1.0 / 1000.0),
+    ] {
+        let mut s = scene(side, tools, substeps, dt);
+        g.bench_function(format!("{name}/rapier_step"), |b| {
+            b.iter(|| s.rapier_step())
+        });
+        g.bench_function(format!("{name}/full"), |b| b.iter(|| s.full_step()));
+        for (h, _, _) in &s.tools {
+            let r = s.set.tool_reaction(*h).unwrap();
+            assert!(
+                r.force.is_finite() && r.held_vertices > 0,
+                "{name}: still pressing"
+            );
+        }
+        {
+            let (tool, _, centre) = s.tools[0];
+            let mut t = 0.0f32;
+            g.bench_function(format!("{name}/haptic"), |b| {
+                b.iter(|| {
+                    t += 1e-3;
+                    s.set
+                        .haptic_step(&s.world, tool, tool_pose(0, tools, centre, t))
+                        .unwrap()
+                })
+            });
+        }
+        let collider = s.set.get(s.soft).unwrap().collider().unwrap();
+        let mut verts = Vec::new();
+        s.set
+            .get(s.soft)
+            .unwrap()
+            .surface
+            .positions_into(&mut verts);
+        g.bench_function(format!("{name}/collider_update"), |b| {
+            b.iter(|| {
+                let c = &mut s.world.colliders[collider];
+                c.shape_mut().as_trimesh_mut().unwrap().set_vertices(&verts);
+            })
+        });
+        assert!(s.set.get(s.soft).unwrap().surface.is_finite());
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
