@@ -1,0 +1,616 @@
+//! rapier's own soft body against this crate's filtered surface, in one process: the same pinned
+//! plate pressed by the same kinematic ball tools, at two mesh sizes, with 1 and 6 tools, at
+//! dt = 1/60 s and 1/1000 s.
+//!
+//! **Surface.** `plate(0.3, 0.3, n, n)`: a 0.3 m square in the xz-plane, 28 × 28 = 784 or
+//! 55 × 55 = 3025 nodes, its rim pinned (108 or 216 vertices). Both engines get the same vertex
+//! positions, the same triangles and the same edges (the crate's `MassSpringSurface::edges()`,
+//! handed to rapier), the same total mass, 0.2 kg split evenly over the vertices (m = 0.2 kg / N: a
+//! sheet of soft tissue about 2 mm thick), and no gravity.
+//!
+//! - `touch`: `MassSpringSurfaceBuilder` with k = 30 N/m and c = 0.05 N·s/m per edge, the
+//!   paper's linear springs, the **exact** filter (`Integrator::EXACT`), attached to a fixed body
+//!   with `SurfaceSet::insert` (1 substep, with its TriMesh collider); the tools are registered
+//!   with `SurfaceSet::add_tool` and the world is stepped by `SurfaceSet::step`. The per-vertex
+//!   `s = dt² Σk/m + dt Σc/m` is printed: at dt = 1/60 it is about 216 (784 nodes) and 832
+//!   (3025 nodes) on average, at dt = 1/1000 about 1.9 and 7.3: beyond explicit Euler's limit
+//!   (s of order 1) everywhere, checked below. `Integrator::NEIGHBOUR` would fall back to the
+//!   exact filter at these s (its error bound `(s/(1+s))²` exceeds the default 0.05), so the
+//!   exact filter is used. Tools hold vertices as moving pins inside the filter (the
+//!   capacitance solve of `MassSpringSurface::hold`), which keeps contact stable at any s.
+//! - `rapier`: `SoftBodyBuilder::new(vertices).edges(edges).surface(triangles)`, the rim in
+//!   `pinned_particles`, `mass(0.2)`, with no bending edges, dihedrals, shape matching or cells:
+//!   the same spring network, solved by rapier's default `Constraints` soft solver inside its
+//!   step (default 4 solver substeps, default impact-adaptive extra substeps). The contact skin
+//!   (`particle_radius`) is 1 mm.
+//!
+//! **Stiffness mapping.** rapier's edge softness is a natural frequency `f` (Hz) and a damping
+//! ratio `ζ`, normalised by the constraint's effective mass. For an edge between two free
+//! particles of mass m that mass is m/2, so a spring k with a damper c maps to
+//! `f = √(2k/m) / 2π` and `ζ = c / (2 √(k m/2))`: 784 nodes f ≈ 77 Hz, ζ ≈ 0.40; 3025 nodes
+//! f ≈ 152 Hz, ζ ≈ 0.79 (printed). The mapping is exact only for stretching an edge between two
+//! free particles. An edge to a pinned particle has twice that effective mass, so rapier makes
+//! it twice as stiff as k. rapier's edges are **distance** constraints: a flat sheet has no
+//! out-of-plane stiffness until it stretches. The crate's linear springs (`SpringModel::Linear`,
+//! eq. 3) pull on the displacement difference in every direction. The tools impose the same
+//! indentation on both, so the displacements compare. The forces do not: a membrane pressed
+//! 5 mm pushes back far less than the linear-spring plate.
+//!
+//! **Tools.** Kinematic position-based balls of radius 25 mm with no friction, at the plate's
+//! centre (1 tool) or at six spots 70 mm and 100 mm apart (6 tools). Each starts with its bottom
+//! 3 mm above the plate, goes down to 5 mm below it over 0.15 s, and holds there. rapier's balls
+//! ride 1 mm higher (its contact skin), so both plates are pressed 5 mm in.
+//!
+//! **Measured**, per engine and configuration:
+//! - `ms_per_step`: the mean wall time of the whole step after a 10 % warm-up
+//!   (`SurfaceSet::step`, i.e. rapier's pipeline plus the surface, for `touch`;
+//!   `PhysicsWorld::step` with the soft body for `rapier`);
+//! - `max_displacement_m`: the largest vertex displacement from home over the run;
+//! - `stable`: every position finite at every step and the displacement below 0.1 m;
+//! - `tool_force_available`: while the tools hold their press (t ≥ 0.15 s), every tool read a
+//!   finite, nonzero force at some step, and no reading was non-finite. For `touch` that reading
+//!   is `SurfaceSet::tool_reaction`. For `rapier` it is the impulse rapier writes back into the
+//!   tool's contact pairs with the soft surface, `ContactPair::total_impulse() / dt` (what
+//!   contact force events report).
+//!
+//! The readable table also gives the share of hold steps × tools with a nonzero force and the
+//! mean upward force on a tool over the hold. Runs are 60 steps (1 s) at dt = 1/60 and 300 steps
+//! (0.3 s) at dt = 1/1000. Before the table, a free crate surface of each size (same k, c, m and
+//! pins, a 10 mN load on the centre vertex) is stepped 300 times with `Integrator::ExplicitEuler`
+//! and with the exact filter: explicit Euler diverges with this stiffness.
+//!
+//! Asserted: explicit Euler diverges at dt = 1/60 while the exact filter stays bounded at both
+//! dt, and in every configuration `touch` is stable and has a tool force. The speed ratio
+//! rapier/touch is printed, not asserted (timing).
+//!
+//! Run with `cargo run --release --example soft_compare [-- --csv]`. With `--csv` only the
+//! header `engine,nodes,tools,dt,ms_per_step,max_displacement_m,stable,tool_force_available`
+//! and the rows are printed (`engine` is `rapier` or `touch`, `dt` in seconds).
+
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::surface::meshing::{plate, SurfaceMesh};
+use std::time::Instant;
+
+/// Side of the square plate (m).
+const SIZE: Real = 0.3;
+/// Mass of the whole plate, pinned rim included (kg).
+const TOTAL_MASS: Real = 0.2;
+/// Stiffness of every edge (N/m).
+const K: Real = 30.0;
+/// Damping of every edge (N·s/m).
+const C: Real = 0.05;
+const TOOL_RADIUS: Real = 0.025;
+/// rapier's contact skin (the soft body's particle radius, m).
+const SKIN: Real = 0.001;
+/// Tool bottom above the plate at the start (m).
+const START_GAP: Real = 0.003;
+/// How far the tools press below the plate (m).
+const PRESS_DEPTH: Real = 0.005;
+/// Time the tools take from the start to full depth (s); they hold from then on.
+const DESCENT: Real = 0.15;
+/// Larger displacements than this count as unstable (m).
+const STABLE_BOUND: Real = 0.1;
+/// Steps of the free-surface divergence check.
+const CHECK_STEPS: usize = 300;
+
+/// A time step: value (s), label, number of steps.
+const DTS: [(Real, &str, usize); 2] = [(1.0 / 60.0, "1/60", 60), (1.0 / 1000.0, "1/1000", 300)];
+
+#[derive(Copy, Clone)]
+struct Config {
+    tools: usize,
+    dt: Real,
+    dt_label: &'static str,
+    steps: usize,
+}
+
+struct Row {
+    engine: &'static str,
+    nodes: usize,
+    cfg: Config,
+    ms_per_step: f64,
+    max_displacement: Real,
+    stable: bool,
+    force_available: bool,
+    /// Share of hold steps × tools with a finite nonzero force.
+    force_share: f64,
+    /// Mean upward force on a tool over the hold (N).
+    mean_force_y: f64,
+}
+
+/// The plate mesh and its pinned rim.
+struct Plate {
+    mesh: SurfaceMesh,
+    rim: Vec<u32>,
+}
+
+impl Plate {
+    fn new(cells: u32) -> Self {
+        let mesh = plate(SIZE, SIZE, cells, cells);
+        let edge = 0.5 * SIZE - 1e-4;
+        let rim = (0..mesh.vertices.len() as u32)
+            .filter(|&i| {
+                let v = mesh.vertices[i as usize];
+                v.x.abs() > edge || v.z.abs() > edge
+            })
+            .collect();
+        Self { mesh, rim }
+    }
+
+    fn nodes(&self) -> usize {
+        self.mesh.num_vertices()
+    }
+
+    /// Mass of one vertex (kg).
+    fn vertex_mass(&self) -> Real {
+        TOTAL_MASS / self.nodes() as Real
+    }
+
+    /// The crate's surface on this plate.
+    fn surface(&self, dt: Real, integrator: Integrator) -> MassSpringSurface {
+        MassSpringSurfaceBuilder::from_mesh(&self.mesh)
+            .stiffness(K)
+            .damping(C)
+            .mass(MassDistribution::Total(TOTAL_MASS))
+            .pinned(self.rim.iter().copied())
+            .dt(dt)
+            .integrator(integrator)
+            .build()
+            .expect("valid plate")
+    }
+}
+
+/// rapier's edge softness `(f Hz, ζ)` for the crate's k and c on an edge between two free
+/// particles of mass m (effective mass m/2).
+fn rapier_softness(m: Real) -> (Real, Real) {
+    let m_eff = 0.5 * m;
+    let f = (K / m_eff).sqrt() / std::f32::consts::TAU;
+    let zeta = C / (2.0 * (K * m_eff).sqrt());
+    (f, zeta)
+}
+
+/// The tools' (x, z) sites.
+fn tool_sites(n: usize) -> Vec<[Real; 2]> {
+    if n == 1 {
+        return vec![[0.0, 0.0]];
+    }
+    let six = [
+        [-0.07, -0.05],
+        [0.0, -0.05],
+        [0.07, -0.05],
+        [-0.07, 0.05],
+        [0.0, 0.05],
+        [0.07, 0.05],
+    ];
+    six[..n.min(6)].to_vec()
+}
+
+/// Height of a tool's bottom at time t (m, y up; the plate lies at y = 0).
+fn tool_bottom(t: Real) -> Real {
+    START_GAP - (START_GAP + PRESS_DEPTH) * (t / DESCENT).clamp(0.0, 1.0)
+}
+
+fn tool_centre(site: [Real; 2], t: Real, lift: Real) -> Vector {
+    Vector::new(site[0], tool_bottom(t) + TOOL_RADIUS + lift, site[1])
+}
+
+/// Kinematic ball tools at their starting poses, `lift` above the crate's path.
+fn insert_tools(world: &mut PhysicsWorld, sites: &[[Real; 2]], lift: Real) -> Vec<ColliderHandle> {
+    sites
+        .iter()
+        .map(|site| {
+            let body = world.insert_body(
+                RigidBodyBuilder::kinematic_position_based()
+                    .translation(tool_centre(*site, 0.0, lift)),
+            );
+            world.insert_collider(
+                ColliderBuilder::ball(TOOL_RADIUS)
+                    .friction(0.0)
+                    .friction_combine_rule(CoefficientCombineRule::Min),
+                Some(body),
+            )
+        })
+        .collect()
+}
+
+/// Sets every tool's target: its pose at time t (the end of the coming step).
+fn drive_tools(
+    world: &mut PhysicsWorld,
+    tools: &[ColliderHandle],
+    sites: &[[Real; 2]],
+    t: Real,
+    lift: Real,
+) {
+    for (h, site) in tools.iter().zip(sites) {
+        let body = world.colliders[*h].parent().expect("tool body");
+        world.bodies[body].set_next_kinematic_translation(tool_centre(*site, t, lift));
+    }
+}
+
+/// A world with no gravity stepping at `dt`.
+fn empty_world(dt: Real) -> PhysicsWorld {
+    PhysicsWorld {
+        gravity: Vector::ZERO,
+        integration_parameters: IntegrationParameters {
+            dt,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// What a run records.
+struct Tracker {
+    cfg: Config,
+    times: Vec<f64>,
+    max_displacement: Real,
+    finite: bool,
+    /// Hold steps with a finite nonzero force, per tool.
+    hits: Vec<usize>,
+    hold_steps: usize,
+    nonfinite_force: bool,
+    force_y_sum: f64,
+}
+
+impl Tracker {
+    fn new(cfg: Config) -> Self {
+        Self {
+            cfg,
+            times: Vec::with_capacity(cfg.steps),
+            max_displacement: 0.0,
+            finite: true,
+            hits: vec![0; cfg.tools],
+            hold_steps: 0,
+            nonfinite_force: false,
+            force_y_sum: 0.0,
+        }
+    }
+
+    fn displacement(&mut self, d: Real) {
+        if d.is_finite() {
+            self.max_displacement = self.max_displacement.max(d);
+        } else {
+            self.finite = false;
+        }
+    }
+
+    /// The tools' forces at the end of a step ending at time t.
+    fn forces(&mut self, t: Real, forces: &[Vector]) {
+        if forces.iter().any(|f| !f.is_finite()) {
+            self.nonfinite_force = true;
+        }
+        if t < DESCENT - 1e-6 {
+            return;
+        }
+        self.hold_steps += 1;
+        for (hits, f) in self.hits.iter_mut().zip(forces) {
+            if f.is_finite() && f.length() > 0.0 {
+                *hits += 1;
+                self.force_y_sum += f.y as f64;
+            }
+        }
+    }
+
+    fn row(self, engine: &'static str, nodes: usize) -> Row {
+        let tail = &self.times[self.times.len() / 10..];
+        let samples = (self.hold_steps * self.cfg.tools).max(1) as f64;
+        Row {
+            engine,
+            nodes,
+            cfg: self.cfg,
+            ms_per_step: tail.iter().sum::<f64>() / tail.len() as f64 * 1e3,
+            max_displacement: self.max_displacement,
+            stable: self.finite && self.max_displacement < STABLE_BOUND,
+            force_available: !self.nonfinite_force && self.hits.iter().all(|&h| h > 0),
+            force_share: self.hits.iter().sum::<usize>() as f64 / samples,
+            mean_force_y: self.force_y_sum / samples,
+        }
+    }
+}
+
+/// The crate: the surface attached to a fixed body, the tools pressing it, `SurfaceSet::step`.
+fn run_touch(p: &Plate, cfg: Config) -> Row {
+    let mut world = empty_world(cfg.dt);
+    let ground = world.insert_body(RigidBodyBuilder::fixed());
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps: 1,
+        collider: true,
+    };
+    let h = set
+        .insert(
+            p.surface(cfg.dt, Integrator::EXACT),
+            ground,
+            &mut world,
+            options,
+        )
+        .expect("attached");
+    let sites = tool_sites(cfg.tools);
+    let tools = insert_tools(&mut world, &sites, 0.0);
+    for t in &tools {
+        set.add_tool(*t, &mut world);
+    }
+    let mut track = Tracker::new(cfg);
+    let mut forces = Vec::with_capacity(tools.len());
+    for k in 0..cfg.steps {
+        let t = (k + 1) as Real * cfg.dt;
+        drive_tools(&mut world, &tools, &sites, t, 0.0);
+        let t0 = Instant::now();
+        set.step(&mut world);
+        track.times.push(t0.elapsed().as_secs_f64());
+        let s = &set.get(h).expect("surface").surface;
+        track.displacement(if s.is_finite() {
+            s.max_displacement()
+        } else {
+            Real::NAN
+        });
+        forces.clear();
+        forces.extend(
+            tools
+                .iter()
+                .map(|t| set.tool_reaction(*t).map_or(Vector::ZERO, |r| r.force)),
+        );
+        track.forces(t, &forces);
+    }
+    track.row("touch", p.nodes())
+}
+
+/// rapier: a soft body on the same vertices, triangles and edges, the same tools, `world.step`.
+fn run_rapier(p: &Plate, edges: &[[u32; 2]], cfg: Config) -> Row {
+    let mut world = empty_world(cfg.dt);
+    let (f, zeta) = rapier_softness(p.vertex_mass());
+    let builder = SoftBodyBuilder::new(p.mesh.vertices.clone())
+        .edges(edges.to_vec())
+        .surface(p.mesh.triangles.clone())
+        .pinned_particles(p.rim.iter().copied())
+        .mass(TOTAL_MASS)
+        .material(SoftBodyMaterial {
+            edge_softness: SpringCoefficients::new(f, zeta),
+            ..Default::default()
+        })
+        .particle_radius(SKIN);
+    let handle = world.insert_soft_body(builder);
+    let sites = tool_sites(cfg.tools);
+    let tools = insert_tools(&mut world, &sites, SKIN);
+    let mut track = Tracker::new(cfg);
+    let mut forces = Vec::with_capacity(tools.len());
+    for k in 0..cfg.steps {
+        let t = (k + 1) as Real * cfg.dt;
+        drive_tools(&mut world, &tools, &sites, t, SKIN);
+        let t0 = Instant::now();
+        world.step();
+        track.times.push(t0.elapsed().as_secs_f64());
+        let d = world.soft_bodies[handle]
+            .particle_positions()
+            .zip(&p.mesh.vertices)
+            .map(|(x, home)| (x - *home).length())
+            .fold(
+                0.0,
+                |a: Real, d| if d.is_finite() { a.max(d) } else { Real::NAN },
+            );
+        track.displacement(d);
+        // The impulses rapier wrote back into each tool's contact pairs over the step, over dt
+        // (a manifold's normal points from collider1 to collider2).
+        forces.clear();
+        forces.extend(tools.iter().map(|tool| {
+            world
+                .contact_pairs_with(*tool)
+                .map(|pair| {
+                    let sign = if pair.collider1 == *tool { -1.0 } else { 1.0 };
+                    pair.total_impulse() * (sign / cfg.dt)
+                })
+                .sum::<Vector>()
+        }));
+        track.forces(t, &forces);
+    }
+    track.row("rapier", p.nodes())
+}
+
+/// Steps a free crate surface `CHECK_STEPS` times under a 10 mN load on its centre vertex:
+/// `Some(largest displacement)`, or `None` once it is no longer finite.
+fn free_run(p: &Plate, dt: Real, integrator: Integrator) -> Option<Real> {
+    let mut s = p.surface(dt, integrator);
+    let centre = (0..p.nodes() as u32)
+        .min_by(|&a, &b| {
+            let da = p.mesh.vertices[a as usize].length();
+            let db = p.mesh.vertices[b as usize].length();
+            da.total_cmp(&db)
+        })
+        .expect("vertices");
+    s.add_force_schedule(
+        vec![centre],
+        ForceProfile::Step {
+            force: Vector::new(0.0, -0.01, 0.0),
+            start: 0.0,
+            end: None,
+        },
+    )
+    .expect("valid force");
+    let mut max_disp: Real = 0.0;
+    for _ in 0..CHECK_STEPS {
+        s.step();
+        let d = s.max_displacement();
+        if !s.is_finite() || s.diverged() || !d.is_finite() {
+            return None;
+        }
+        max_disp = max_disp.max(d);
+    }
+    Some(max_disp)
+}
+
+fn bounded(run: Option<Real>) -> bool {
+    run.is_some_and(|d| d < STABLE_BOUND)
+}
+
+fn describe(run: Option<Real>) -> String {
+    match run {
+        Some(d) if d < STABLE_BOUND => format!("bounded (max {:.3} mm)", d * 1e3),
+        Some(d) => format!("unbounded (max {d:.3e} m)"),
+        None => "diverged (not finite)".to_string(),
+    }
+}
+
+fn print_setup(plates: &[Plate]) {
+    println!(
+        "plate {SIZE} m square, rim pinned, {TOTAL_MASS} kg in all, k = {K} N/m and \
+         c = {C} N*s/m per edge, no gravity; ball tools r = {} mm press {} mm in over {DESCENT} s, \
+         then hold",
+        TOOL_RADIUS * 1e3,
+        PRESS_DEPTH * 1e3
+    );
+    for p in plates {
+        let (f, zeta) = rapier_softness(p.vertex_mass());
+        println!(
+            "{} nodes: {} triangles, {} edges, {} pinned, m = {:.3e} kg per vertex; rapier edge \
+             softness f = {f:.1} Hz, zeta = {zeta:.3}",
+            p.nodes(),
+            p.mesh.num_triangles(),
+            p.surface(DTS[0].0, Integrator::EXACT).edges().len(),
+            p.rim.len(),
+            p.vertex_mass()
+        );
+        for (dt, label, _) in DTS {
+            let s = p.surface(dt, Integrator::NEIGHBOUR);
+            let free: Vec<Real> = s.s_values().into_iter().filter(|&v| v > 0.0).collect();
+            println!(
+                "  dt = {label}: s mean {:.3}, max {:.3}; NEIGHBOUR would fall back to exact: {}",
+                free.iter().sum::<Real>() / free.len() as Real,
+                free.iter().copied().fold(0.0, Real::max),
+                s.filter_fallback()
+            );
+        }
+    }
+    println!();
+}
+
+fn main() {
+    let csv = std::env::args().any(|a| a == "--csv");
+    let plates = [Plate::new(27), Plate::new(54)];
+    if !csv {
+        print_setup(&plates);
+    }
+
+    // The premise: with this stiffness explicit integration diverges at dt = 1/60, the filter
+    // does not.
+    for p in &plates {
+        for (dt, label, _) in DTS {
+            let explicit = free_run(p, dt, Integrator::ExplicitEuler);
+            let exact = free_run(p, dt, Integrator::EXACT);
+            if !csv {
+                println!(
+                    "free surface, {} nodes, dt = {label}, {CHECK_STEPS} steps, 10 mN on the \
+                     centre: explicit Euler {}; exact filter {}",
+                    p.nodes(),
+                    describe(explicit),
+                    describe(exact)
+                );
+            }
+            assert!(
+                bounded(exact),
+                "the exact filter stays bounded ({} nodes, dt = {label})",
+                p.nodes()
+            );
+            if label == "1/60" {
+                assert!(
+                    !bounded(explicit),
+                    "explicit Euler diverges at dt = 1/60 ({} nodes)",
+                    p.nodes()
+                );
+            }
+        }
+    }
+    if !csv {
+        println!();
+    }
+
+    let mut rows = Vec::new();
+    for p in &plates {
+        let edges = p.surface(DTS[0].0, Integrator::EXACT).edges().to_vec();
+        for tools in [1, 6] {
+            for (dt, dt_label, steps) in DTS {
+                let cfg = Config {
+                    tools,
+                    dt,
+                    dt_label,
+                    steps,
+                };
+                let rapier = run_rapier(p, &edges, cfg);
+                let touch = run_touch(p, cfg);
+                assert!(
+                    touch.stable,
+                    "touch is stable ({} nodes, {tools} tools, dt = {dt_label}): max \
+                     displacement {} m",
+                    p.nodes(),
+                    touch.max_displacement
+                );
+                assert!(
+                    touch.force_available,
+                    "touch has a tool force ({} nodes, {tools} tools, dt = {dt_label})",
+                    p.nodes()
+                );
+                rows.push((rapier, touch));
+            }
+        }
+    }
+
+    if csv {
+        println!(
+            "engine,nodes,tools,dt,ms_per_step,max_displacement_m,stable,tool_force_available"
+        );
+        for r in rows.iter().flat_map(|(a, b)| [a, b]) {
+            println!(
+                "{},{},{},{:.6},{:.4},{:.6},{},{}",
+                r.engine,
+                r.nodes,
+                r.cfg.tools,
+                r.cfg.dt,
+                r.ms_per_step,
+                r.max_displacement,
+                r.stable,
+                r.force_available
+            );
+        }
+        return;
+    }
+    println!(
+        "{:>5} {:>5} {:>6} {:>7} {:>9} {:>11} {:>7} {:>11} {:>13} {:>12}",
+        "nodes",
+        "tools",
+        "dt",
+        "engine",
+        "ms/step",
+        "max disp mm",
+        "stable",
+        "tool force",
+        "F>0 on hold %",
+        "mean Fy N"
+    );
+    let mut min_ratio = f64::INFINITY;
+    for (rapier, touch) in &rows {
+        for r in [rapier, touch] {
+            println!(
+                "{:>5} {:>5} {:>6} {:>7} {:>9.4} {:>11.3} {:>7} {:>11} {:>13.0} {:>12.3e}",
+                r.nodes,
+                r.cfg.tools,
+                r.cfg.dt_label,
+                r.engine,
+                r.ms_per_step,
+                r.max_displacement * 1e3,
+                r.stable,
+                r.force_available,
+                r.force_share * 100.0,
+                r.mean_force_y
+            );
+        }
+        let ratio = rapier.ms_per_step / touch.ms_per_step;
+        min_ratio = min_ratio.min(ratio);
+        println!(
+            "{:>5} {:>5} {:>6} rapier/touch time per step: {ratio:.1}x",
+            touch.nodes, touch.cfg.tools, touch.cfg.dt_label
+        );
+    }
+    println!(
+        "smallest speed ratio rapier/touch: {min_ratio:.1}x (target 5x; timing, not asserted)"
+    );
+}
