@@ -133,8 +133,12 @@ struct ToolState {
 /// # Limitations
 /// - Loading happens at vertices: a sharp tool tip pressing inside a large triangle with no
 ///   vertex inside the tool is not seen. Mesh the surface finer than the tool.
-/// - Tools are tested with parry's point queries: convex shapes (balls, cuboids, capsules,
-///   convex polyhedra). A TriMesh tool is not solid for parry and holds no vertex.
+/// - Tools are tested with parry's point queries: convex shapes. Balls, cuboids, capsules and
+///   cylinders give steady forces. Convex polyhedra hold vertices but their force fluctuates
+///   from step to step (up to several times the ball's on a faceted ball; not yet understood).
+///   A TriMesh tool is not solid for parry and holds no vertex.
+/// - An upright flat face dragged sideways ploughs the vertices ahead of it (frictionless
+///   contact with linear springs gives them no reason to slide under); tilt it like a sled.
 /// - The surface is rigidly attached to its body's frame; the body's acceleration does not
 ///   load it.
 pub struct SurfaceSet {
@@ -576,12 +580,9 @@ fn hold_vertices(
             }
             followed.push((iu, *p, surface.velocity(iu)));
         }
-        let nearest = shape.project_point(pose, *p, false).point;
+        let nearest = nearest_on_boundary(shape, pose, *p);
         let out = if entering && rel.length() > (nearest - *p).length() + margin {
-            let d = rel.normalize();
-            shape
-                .cast_ray(pose, &Ray::new(*p, d), Real::MAX, false)
-                .map_or(nearest, |t| *p + d * t)
+            exit_along(shape, pose, *p, rel.normalize()).unwrap_or(nearest)
         } else {
             nearest
         };
@@ -590,14 +591,7 @@ fn hold_vertices(
         }
         // The tool's outward normal at the contact point.
         let local = pose.inverse_transform_point(out);
-        let (proj, feature) = shape.project_local_point_and_get_feature(local);
-        let n = shape
-            .feature_normal_at_point(0, feature, proj.point)
-            .map(|n| pose.rotation * n)
-            .filter(|n| n.is_finite())
-            .or_else(|| (out - *p).try_normalize())
-            .or_else(|| (out - pose.translation).try_normalize())
-            .unwrap_or(Vector::Y);
+        let n = pose.rotation * outward_normal(shape, local, margin);
         // Frictionless: the tool sets the normal velocity only (that of the tool's material
         // point under the vertex, rotation included).
         let tool_velocity = if h > 0.0 {
@@ -634,4 +628,94 @@ fn hold_vertices(
         count += 1;
     }
     (force, moment, count)
+}
+
+/// The outward normal of a convex `shape` at `local`, a point on its boundary (shape frame).
+///
+/// A short ray cast from just outside the point, back toward the shape's centre, hits the
+/// boundary next to the point and returns the exact normal there for every convex shape
+/// (parry's feature normals at a boundary point are unreliable for polyhedra, cylinders and
+/// cones, and missing for capsules and round shapes). Fallbacks: the feature normal, then the
+/// direction from the shape's centre.
+fn outward_normal(shape: &dyn parry3d::shape::Shape, local: Vector, margin: Real) -> Vector {
+    if let Some((n, _)) = shape
+        .as_convex_polyhedron()
+        .and_then(|poly| closest_face(poly, local))
+    {
+        return n;
+    }
+    let aabb = shape.compute_local_aabb();
+    let centre = aabb.center();
+    let radial = (local - centre).try_normalize().unwrap_or(Vector::Y);
+    let eps = 1e-3 * aabb.extents().max_element() + 10.0 * margin;
+    let ray = Ray::new(local + radial * eps, -radial);
+    if let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, 2.0 * eps, true) {
+        let n = hit.normal;
+        if hit.time_of_impact > 0.0 && n.is_finite() && n.dot(radial) > 0.0 {
+            if let Some(n) = n.try_normalize() {
+                return n;
+            }
+        }
+    }
+    let (proj, feature) = shape.project_local_point_and_get_feature(local);
+    shape
+        .feature_normal_at_point(0, feature, proj.point)
+        .filter(|n| n.is_finite() && n.dot(radial) > 0.0)
+        .unwrap_or(radial)
+}
+
+/// The face of `poly` whose plane is nearest above or least below `local`: its outward normal
+/// and the signed distance of `local` to its plane. For a point inside the polyhedron that
+/// face holds the nearest boundary point.
+fn closest_face(poly: &parry3d::shape::ConvexPolyhedron, local: Vector) -> Option<(Vector, Real)> {
+    let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
+    poly.faces()
+        .iter()
+        .filter_map(|f| {
+            let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
+            Some((f.normal, f.normal.dot(local - *v)))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// The nearest point of the tool's boundary to `p` (world). parry's projection of a point
+/// inside a convex polyhedron is approximate, so there the nearest face plane is used.
+fn nearest_on_boundary(shape: &dyn parry3d::shape::Shape, pose: &Pose, p: Vector) -> Vector {
+    if let Some(poly) = shape.as_convex_polyhedron() {
+        let local = pose.inverse_transform_point(p);
+        if let Some((n, d)) = closest_face(poly, local) {
+            if d <= 0.0 {
+                return pose.transform_point(local - n * d);
+            }
+        }
+    }
+    shape.project_point(pose, p, false).point
+}
+
+/// Where the ray from `p` (inside the tool, world) along the unit `d` leaves the tool. For a
+/// convex polyhedron the nearest exit plane is used (parry's ray cast from inside a support
+/// map is iterative and can stop early).
+fn exit_along(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+    d: Vector,
+) -> Option<Vector> {
+    if let Some(poly) = shape.as_convex_polyhedron() {
+        let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
+        let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
+        let t = poly
+            .faces()
+            .iter()
+            .filter_map(|f| {
+                let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
+                let along = f.normal.dot(dl);
+                (along > 0.0).then(|| (-f.normal.dot(local - *v) / along).max(0.0))
+            })
+            .min_by(|a, b| a.total_cmp(b))?;
+        return Some(p + d * t);
+    }
+    shape
+        .cast_ray(pose, &Ray::new(p, d), Real::MAX, false)
+        .map(|t| p + d * t)
 }

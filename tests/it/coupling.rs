@@ -46,10 +46,7 @@ fn world_with_plate(substeps: u32) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) 
     world_with_plate_of_mass(substeps, 0.01)
 }
 
-fn world_with_plate_of_mass(
-    substeps: u32,
-    mass: f32,
-) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
+fn world_with_plate_of_mass(substeps: u32, mass: f32) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
@@ -407,4 +404,44 @@ fn haptic_force_is_continuous_when_the_tool_turns_back() {
         .iter()
         .fold((f32::MAX, f32::MIN), |(a, b), y| (a.min(*y), b.max(*y)));
     assert!(hi - lo < 0.01 * hi, "force drifts: {at_phase:?}");
+}
+
+#[test]
+fn capsule_and_cylinder_tools_get_steady_normal_forces() {
+    // A capsule with a ball's tip presses like the ball; a flat-bottomed cylinder holds the
+    // vertices under it with a vertical force. Both steady from step to step.
+    let c = Vector::new(0.5, 0.0, 0.5);
+    let depth = 0.01;
+    let mut forces = Vec::new();
+    for (shape, bottom) in [
+        (ColliderBuilder::ball(0.02), 0.02),
+        (ColliderBuilder::capsule_y(0.03, 0.02), 0.05),
+        (ColliderBuilder::cylinder(0.01, 0.15), 0.01),
+    ] {
+        let (mut world, mut set, _) = world_with_plate(8);
+        let top = c + Vector::Y * (bottom + 0.05);
+        let b = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(top));
+        let tool = world.insert_collider(shape, Some(b));
+        set.add_tool(tool, &mut world);
+        let end = c + Vector::Y * (bottom - depth);
+        press(&mut world, &mut set, &[(b, top, end)], 30, 240);
+        let f0 = set.tool_reaction(tool).unwrap();
+        for _ in 0..5 {
+            set.step(&mut world);
+            let f = set.tool_reaction(tool).unwrap();
+            assert!(
+                (f.force - f0.force).length() < 1e-3 * f0.force.length(),
+                "{:?} -> {:?}",
+                f0.force,
+                f.force
+            );
+        }
+        assert!(f0.force.y > 0.0);
+        assert!(f0.force.x.abs() < 1e-3 * f0.force.y && f0.force.z.abs() < 1e-3 * f0.force.y);
+        forces.push(f0);
+    }
+    // Same tip, same force.
+    assert!((forces[1].force - forces[0].force).length() < 1e-3 * forces[0].force.y);
+    // The flat cylinder (radius 0.15) holds the centre vertex and most of its ring.
+    assert!(forces[2].held_vertices >= 5, "{}", forces[2].held_vertices);
 }
