@@ -23,8 +23,11 @@
 //! # What is done beyond the paper
 //! - All arithmetic runs in `f64` in the fixed object's frame, from the `f32` inputs.
 //! - Candidates are pruned by a simultaneous traversal of both parry BVHs with the moving
-//!   object's boxes swept over the trajectory; each vertex-triangle and edge-edge pair is tested
-//!   once (stamp arrays, no hashing).
+//!   object's boxes swept over the trajectory, bounded per triangle pair by an exact plane
+//!   bound (branch and bound). The first-touch path tests features per triangle pair (a shared
+//!   vertex or edge can be tested by each triangle holding it; the classification merges the
+//!   duplicates); the full event scan used for perforation tests each vertex-triangle and
+//!   edge-edge pair once (stamp arrays, no hashing).
 //! - The state (Fig. 1) is decided by tests of the pose itself: a transversal crossing of the
 //!   two surfaces, or (for closed meshes) one object inside the other.
 //! - If the previous pose already penetrated (or a rotation caused the penetration) the first

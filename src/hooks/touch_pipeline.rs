@@ -156,7 +156,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
     /// Guards and reports `collider` without rapier hooks. Colliders with
     /// `ActiveHooks::MODIFY_SOLVER_CONTACTS` are guarded anyway and also get their manifolds
-    /// rewritten; but rapier never recycles the contacts of a pair with active hooks (1.8x its
+    /// rewritten; but rapier never recycles the contacts of a pair with active hooks (1.72x its
     /// step time with 100 boxes on a TriMesh floor, see the README), so colliders that only need
     /// the step guard, the tool proxies and the reports are cheaper tracked this way.
     pub fn track_collider(&mut self, collider: ColliderHandle) {

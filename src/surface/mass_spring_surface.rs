@@ -833,7 +833,7 @@ impl MassSpringSurface {
     /// steps, until [`MassSpringSurface::release_all`]: a moving pin. It keeps the velocity
     /// given by [`MassSpringSurface::set_state`], and the rest of the surface responds to it as
     /// to a pin: the filtered integrators solve for the holders' impulses through the columns
-    /// of `W` at the held vertices (a small dense system per step, one extra solve per newly
+    /// of the filter (`S⁻¹ = W M⁻¹`) at the held vertices (a small dense system per step, one extra solve per newly
     /// held vertex for the exact filter, cached), Baraff-Witkin projects its CG. A held vertex's
     /// [`MassSpringSurface::internal_force`] is what it pushes the holder with.
     ///
@@ -1327,10 +1327,11 @@ impl std::fmt::Debug for MassSpringSurface {
 
 /// The holders' impulses in the filtered step: with `H` the held vertices' constrained
 /// directions `d` (the normal of a sliding hold, the three axes of a full hold), finds the
-/// impulses `λ` with `dᵀ (Δv + W d λ) = 0` for every constraint (a small dense system
-/// `dₐᵀ W_ab d_b λ = -dₐᵀ Δv`, the capacitance matrix of the held set) and adds `W d λ` to
+/// impulses `λ` with `dᵀ (Δv + P d λ) = 0` for every constraint, where `P = S⁻¹ = W M⁻¹` is
+/// the filter as applied to impulses (exact or neighbour) — a small dense system
+/// `dₐᵀ P_ab d_b λ = -dₐᵀ Δv`, the capacitance matrix of the held set — and adds `P d λ` to
 /// `Δv`. The rest of the surface then responds to the held vertices as if they were pinned
-/// where the holder puts them, at any `s`, without refactoring the filter: `W`'s columns for
+/// where the holder puts them, at any `s`, without refactoring the filter: `P`'s columns for
 /// the held vertices are the filter's own rows (neighbour) or one cached solve each (exact).
 fn constrain_held(
     filter: &mut Filter,
