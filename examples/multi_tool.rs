@@ -29,10 +29,8 @@
 //! edge up, like a sled: with frictionless vertex contact and the linear springs, an upright
 //! cuboid's vertical leading face ploughs the vertices it meets ahead of it instead of letting
 //! them slide under (tried: vertices carried 15 to 24 mm, a 0.7 to 0.9 N horizontal force).
-//! There is no capsule and no convex polyhedron: the crate takes a tool's contact normal from
-//! parry's feature normals, which these shapes do not give reliably for a point on their
-//! boundary (a capsule pressed at rest gets a force that jumps between 0.18 N and 1.1 N from
-//! step to step where a ball of the same tip gets a steady 0.81 N).
+//! There is no convex polyhedron: its force still fluctuates from step to step (see the
+//! `SurfaceSet` limitations; capsules and cylinders are steady, `tests/it/coupling.rs`).
 //!
 //! **Printed** every 0.25 s (at t = 0.2, 0.45, 0.7, ... s): per tool the vertices it holds and
 //! its force magnitude (N), the organ's largest displacement (mm), the magnitudes of the tools'
