@@ -53,6 +53,8 @@ pub mod coupling;
 pub mod geometry;
 pub mod hooks;
 pub mod math;
+#[cfg(feature = "render")]
+pub mod render;
 pub mod scenes;
 pub mod surface;
 
