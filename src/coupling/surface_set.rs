@@ -134,8 +134,11 @@ struct ToolState {
 /// - Loading happens at vertices: a sharp tool tip pressing inside a large triangle with no
 ///   vertex inside the tool is not seen. Mesh the surface finer than the tool.
 /// - Tools are tested with parry's point queries: convex shapes. Balls, cuboids, capsules and
-///   cylinders give steady forces. Convex polyhedra hold vertices but their force fluctuates
-///   from step to step (up to several times the ball's on a faceted ball; not yet understood).
+///   cylinders give steady forces, and so does a box-shaped convex polyhedron. A rounded
+///   convex polyhedron (the hull of an icosphere) holds vertices but its force fluctuates from
+///   step to step, up to ten times the ball's (not yet understood; parry's point queries on a
+///   hull with merged faces also disagree with its face planes by up to a millimetre on a 3 cm
+///   hull).
 ///   A TriMesh tool is not solid for parry and holds no vertex.
 /// - An upright flat face dragged sideways ploughs the vertices ahead of it (frictionless
 ///   contact with linear springs gives them no reason to slide under); tilt it like a sled.
