@@ -1,6 +1,9 @@
 //! A dynamic ball dropped on a soft plate, two-way coupled: the plate's force is all that stops
 //! it.
 //!
+//! The scene is the library's `rapier_touch::scenes::BallOnPlateScene` (also drawn by the
+//! `frames` example); this example steps it, prints it and checks it.
+//!
 //! **Scene.** `plate(0.3, 0.3, 15, 15)`: 256 nodes 20 mm apart at y = 0, its 60 rim vertices
 //! pinned, attached to a fixed body with `SurfaceSet::insert`. The paper's linear springs,
 //! k = 30 N/m and c = 1 N·s/m per edge, 0.05 kg spread evenly, the exact filter, 17 substeps
@@ -45,69 +48,28 @@
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::plate;
+use rapier_touch::scenes::BallOnPlateScene;
 
-const DT: Real = 1.0 / 60.0;
-const SUBSTEPS: u32 = 17;
-const END_TIME: Real = 5.0;
-const SIZE: Real = 0.3;
-const CELLS: u32 = 15;
-const K: Real = 30.0;
-const C: Real = 1.0;
-const PLATE_MASS: Real = 0.05;
-const RADIUS: Real = 0.03;
-const BALL_MASS: Real = 0.1;
-const START: Vector = Vector::new(0.004, 0.1, -0.003);
-const G: Real = 9.81;
+type Scene = BallOnPlateScene;
+const DT: Real = Scene::DT;
+const SUBSTEPS: u32 = Scene::SUBSTEPS;
+const SIZE: Real = Scene::SIZE;
+const K: Real = Scene::K;
+const C: Real = Scene::C;
+const PLATE_MASS: Real = Scene::PLATE_MASS;
+const RADIUS: Real = Scene::RADIUS;
+const START: Vector = Scene::START;
 
 fn main() {
-    let mut world = PhysicsWorld {
-        gravity: Vector::new(0.0, -G, 0.0),
-        ..Default::default()
-    };
-    world.integration_parameters.dt = DT;
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
-    let mesh = plate(SIZE, SIZE, CELLS, CELLS);
-    let half = 0.5 * SIZE - 1e-4;
-    let rim: Vec<u32> = (0..mesh.num_vertices() as u32)
-        .filter(|&i| {
-            let v = mesh.vertices[i as usize];
-            v.x.abs() > half || v.z.abs() > half
-        })
-        .collect();
-    let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
-        .stiffness(K)
-        .damping(C)
-        .mass(MassDistribution::Total(PLATE_MASS))
-        .pinned(rim.iter().copied())
-        .integrator(Integrator::EXACT)
-        .build()
-        .expect("valid plate");
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: SUBSTEPS,
-        collider: true,
-    };
-    let h = set
-        .insert(surface, ground, &mut world, options)
-        .expect("attached");
-    let plate_collider = set.get(h).unwrap().collider().expect("collider");
-
-    let volume = 4.0 / 3.0 * std::f32::consts::PI * RADIUS.powi(3);
-    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(START));
-    let collider = world.insert_collider(
-        ColliderBuilder::ball(RADIUS).density(BALL_MASS / volume),
-        Some(ball),
-    );
-    set.add_tool(collider, &mut world);
-    let mass = world.bodies[ball].mass();
-    let weight = mass * G;
+    let mut scene = Scene::new();
+    let mass = scene.ball_mass();
+    let weight = scene.weight();
     println!(
         "plate {SIZE} x {SIZE} m, {} nodes ({} on the rim pinned), k = {K} N/m, c = {C} N*s/m \
          per edge, {PLATE_MASS} kg, exact filter, {SUBSTEPS} substeps; ball r = {} mm, \
          {mass:.3} kg (weight {weight:.4} N), dropped from y = {} mm",
-        mesh.num_vertices(),
-        rim.len(),
+        scene.mesh.num_vertices(),
+        scene.rim.len(),
         RADIUS * 1e3,
         START.y * 1e3
     );
@@ -116,7 +78,7 @@ fn main() {
         "t s", "y mm", "vy m/s", "held", "Fy N", "disp mm"
     );
 
-    let steps = (END_TIME / DT).round() as usize;
+    let steps = Scene::total_steps();
     let mut positions = Vec::new();
     let mut lowest_gap = Real::MAX;
     let mut touched = false;
@@ -125,12 +87,12 @@ fn main() {
     let (mut y_lo, mut y_hi, mut support) = (Real::MAX, Real::MIN, 0.0);
     let last_second = (1.0 / DT).round() as usize;
     for step in 1..=steps {
-        set.step(&mut world);
-        let t = step as Real * DT;
-        let body = &world.bodies[ball];
-        let (p, v) = (body.translation(), body.linvel());
-        let r = set.tool_reaction(collider).expect("tool");
-        let s = &set.get(h).unwrap().surface;
+        scene.step();
+        let t = scene.time();
+        debug_assert_eq!(t, step as Real * DT);
+        let (p, v) = (scene.ball_position(), scene.ball_velocity());
+        let r = scene.reaction();
+        let s = scene.surface();
         assert!(p.is_finite() && v.is_finite(), "ball at t = {t}");
         assert!(
             r.force.is_finite() && r.mean_force.is_finite() && r.torque.is_finite(),
@@ -143,10 +105,11 @@ fn main() {
         s.positions_into(&mut positions);
         let low = positions.iter().map(|q| q.y).fold(Real::MAX, Real::min);
         lowest_gap = lowest_gap.min(p.y - low);
-        let plate_pose = *world.colliders[plate_collider].position();
+        let plate = &scene.world.colliders[scene.plate_collider];
+        let plate_pose = *plate.position();
         let up = Ray::new(p, Vector::Y);
         assert!(
-            world.colliders[plate_collider]
+            plate
                 .shape()
                 .cast_ray(&plate_pose, &up, 10.0, false)
                 .is_none(),
@@ -182,11 +145,10 @@ fn main() {
             );
         }
     }
-    let body = &world.bodies[ball];
-    let (p, v) = (body.translation(), body.linvel());
-    let r = set.tool_reaction(collider).expect("tool");
-    let s = &set.get(h).unwrap().surface;
-    let pins: Vector = rim.iter().map(|&i| s.internal_force(i)).sum();
+    let (p, v) = (scene.ball_position(), scene.ball_velocity());
+    let r = scene.reaction();
+    let s = scene.surface();
+    let pins = scene.pins_reaction();
     println!();
     println!(
         "bounces: {} (apex heights {:?} mm)",

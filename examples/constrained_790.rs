@@ -33,159 +33,37 @@
 //! largest displacement (measured: 0.085 %); Baraff-Witkin with linear springs matches the exact
 //! filter (below 1e-4 of the displacement).
 //!
-//! Run with `cargo run --release --example constrained_790`.
+//! The organ, its pins and forces are the library's `rapier_touch::scenes::Fig7Organ` (also
+//! drawn by `pictures` and plotted by `plots`). A progress bar runs on stderr while it steps
+//! (`--quiet` hides it).
+//!
+//! Run with `cargo run --release --example constrained_790 [-- --quiet]`.
 
 use rapier_touch::prelude::*;
-use rapier_touch::surface::meshing::{paper_organ_outline, triangulate_planar, PlanarMesh};
-use std::collections::BTreeSet;
+use rapier_touch::scenes::{diverged, Fig7Organ, COMPARED_INTEGRATORS as INTEGRATORS};
 use std::time::{Duration, Instant};
 
-const DT: Real = 1.0 / 60.0;
+#[path = "common/progress.rs"]
+mod progress;
+
+const DT: Real = Fig7Organ::DT;
 const STEPS: usize = 600; // 10 s
 const SAMPLE_EVERY: usize = 150; // t = 0, 2.5, 5, 7.5, 10 s
-const MASS: Real = 0.001;
-const K: Real = 0.1;
-const C: Real = 0.001;
+const MASS: Real = Fig7Organ::MASS;
+const K: Real = Fig7Organ::K;
+const C: Real = Fig7Organ::C;
 
-const INTEGRATORS: [(&str, Integrator); 4] = [
-    ("explicit Euler", Integrator::ExplicitEuler),
-    ("exact filter", Integrator::EXACT),
-    ("neighbour filter", Integrator::NEIGHBOUR),
-    ("Baraff-Witkin", Integrator::BARAFF_WITKIN),
-];
 const EXACT: usize = 1;
 const NEIGHBOUR: usize = 2;
 const BARAFF_WITKIN: usize = 3;
 
-/// The six force sites (u, v) and their profiles.
-fn forces() -> [([Real; 2], ForceProfile); 6] {
-    let mn = 0.001;
-    let r = std::f32::consts::FRAC_1_SQRT_2;
-    [
-        (
-            [0.04, 0.03],
-            ForceProfile::Step {
-                force: Vector::new(0.0, -mn, 0.0),
-                start: 0.0,
-                end: None,
-            },
-        ),
-        (
-            [-0.02, 0.03],
-            ForceProfile::Ramp {
-                force: Vector::new(0.0, mn, 0.0),
-                start: 0.0,
-                duration: 2.0,
-            },
-        ),
-        (
-            [0.07, 0.0],
-            ForceProfile::Step {
-                force: Vector::new(mn, 0.0, 0.0),
-                start: 1.0,
-                end: Some(6.0),
-            },
-        ),
-        (
-            [0.0, -0.035],
-            ForceProfile::Ramp {
-                force: Vector::new(0.0, 0.0, -mn),
-                start: 0.5,
-                duration: 3.0,
-            },
-        ),
-        (
-            [-0.035, -0.03],
-            ForceProfile::Step {
-                force: Vector::new(-mn * r, -mn * r, 0.0),
-                start: 2.0,
-                end: None,
-            },
-        ),
-        (
-            [0.055, -0.03],
-            ForceProfile::Ramp {
-                force: Vector::new(0.0, -0.6 * mn, 0.8 * mn),
-                start: 3.0,
-                duration: 2.0,
-            },
-        ),
-    ]
-}
-
-/// Each site's group: the free vertex nearest to it and its free edge neighbours.
-fn groups(planar: &PlanarMesh, pinned: &BTreeSet<u32>) -> Vec<Vec<u32>> {
-    let mesh = &planar.mesh;
-    let mut adjacent = vec![BTreeSet::new(); mesh.num_vertices()];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            adjacent[t[k] as usize].insert(t[(k + 1) % 3]);
-            adjacent[t[(k + 1) % 3] as usize].insert(t[k]);
-        }
-    }
-    forces()
-        .iter()
-        .map(|([u, v], _)| {
-            let site = Vector::new(*u, 0.0, *v);
-            let centre = (0..mesh.num_vertices() as u32)
-                .filter(|i| !pinned.contains(i))
-                .min_by(|&a, &b| {
-                    let da = (mesh.vertices[a as usize] - site).length();
-                    let db = (mesh.vertices[b as usize] - site).length();
-                    da.total_cmp(&db)
-                })
-                .expect("free vertices");
-            std::iter::once(centre)
-                .chain(adjacent[centre as usize].iter().copied())
-                .filter(|i| !pinned.contains(i))
-                .collect()
-        })
-        .collect()
-}
-
-/// Diverged: the f64 state is no longer finite, or too large for the f32 accessors.
-fn diverged(s: &MassSpringSurface) -> bool {
-    !s.is_finite() || !s.max_displacement().is_finite() || !s.total_energy().is_finite()
-}
-
 fn main() {
-    let (outline, target_edge) = paper_organ_outline();
-    let planar = triangulate_planar(&outline, target_edge).expect("meshes");
+    let organ = Fig7Organ::new();
+    let (planar, polyline, groups) = (&organ.planar, &organ.polyline, &organ.groups);
     let n = planar.mesh.num_vertices();
-    assert_eq!(planar.constrained.len(), 1, "one internal constraint");
-    let polyline = planar.constrained[0].clone();
-    let pinned: BTreeSet<u32> = polyline.iter().copied().collect();
-    let groups = groups(&planar, &pinned);
-    let mut seen = BTreeSet::new();
-    for g in &groups {
-        assert!(
-            g.iter().all(|i| seen.insert(*i)),
-            "force groups are disjoint"
-        );
-    }
-
     let mut surfaces: Vec<MassSpringSurface> = INTEGRATORS
         .iter()
-        .map(|&(_, integrator)| {
-            let mut s = MassSpringSurfaceBuilder::new(
-                planar.mesh.vertices.clone(),
-                planar.mesh.triangles.clone(),
-            )
-            .stiffness(K)
-            .damping(C)
-            .mass(MassDistribution::PerVertex(MASS))
-            .pinned(polyline.iter().copied())
-            .dt(DT)
-            .integrator(integrator)
-            .neighbour_max_error(Real::INFINITY)
-            .build()
-            .expect("valid organ mesh");
-            for (g, (_, profile)) in groups.iter().zip(forces()) {
-                s.add_force_schedule(g.clone(), profile)
-                    .expect("valid force");
-            }
-            s
-        })
+        .map(|&(_, integrator)| organ.surface(integrator))
         .collect();
     assert!(!surfaces[NEIGHBOUR].filter_fallback());
     let s_free: Vec<Real> = surfaces[EXACT]
@@ -207,7 +85,7 @@ fn main() {
         s_free.iter().copied().fold(0.0, Real::max),
         surfaces[EXACT].neighbour_error_bound(1)
     );
-    for (k, (g, ([u, v], profile))) in groups.iter().zip(forces()).enumerate() {
+    for (k, (g, ([u, v], profile))) in groups.iter().zip(Fig7Organ::forces()).enumerate() {
         println!(
             "force {}: {} vertices around ({u}, {v}): {profile:?}",
             k + 1,
@@ -223,10 +101,12 @@ fn main() {
     let mut max_disp: [Real; 4] = [0.0; 4];
     let mut diverged_at: [Option<Real>; 4] = [None; 4];
     let mut time = [Duration::ZERO; 4];
+    let bar = progress::bar(STEPS as u64 + 1, "constrained_790");
     for step in 0..=STEPS {
+        bar.inc(1);
         for (k, s) in surfaces.iter().enumerate() {
             // The constrained internal boundary never moves, whatever the integrator does.
-            for &p in &polyline {
+            for &p in polyline {
                 assert_eq!(
                     s.position(p),
                     s.home(p),
@@ -261,6 +141,7 @@ fn main() {
         }
     }
 
+    bar.finish_and_clear();
     println!(
         "{:<17} {:>5} {:>16} {:>18} {:>14}",
         "integrator", "t s", "max disp mm", "RMS vs exact mm", "energy J"

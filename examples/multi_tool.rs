@@ -1,5 +1,9 @@
 //! Six rigid tools pressing and dragging on a soft organ surface of 788 nodes in a rapier scene.
 //!
+//! The scene, its tools and their scripted paths are the library's
+//! `rapier_touch::scenes::MultiToolScene` (also drawn by the `frames` example and plotted by
+//! `plots`); this example steps it, prints it and checks it.
+//!
 //! **The organ.** `paper_organ_outline()` meshed with its own target edge (5.28 mm) as in
 //! `constrained_790`: 788 nodes, a kidney about 0.14 m × 0.10 m in the plane y = 0, lifted into
 //! a dome: the height solves the mesh's Poisson problem `L h = 1` with `h = 0` on the outer
@@ -60,268 +64,35 @@
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::{paper_organ_outline, triangulate_planar, SurfaceMesh};
+use rapier_touch::scenes::{MultiToolScene, ToolPhase, ToolShape};
 use std::time::Instant;
 
-const DT: Real = 1.0 / 60.0;
-const SUBSTEPS: u32 = 17;
-const END_TIME: Real = 7.5;
+type Scene = MultiToolScene;
+const DT: Real = Scene::DT;
+const SUBSTEPS: u32 = Scene::SUBSTEPS;
+const END_TIME: Real = Scene::END_TIME;
 const PRINT_EVERY: usize = 15; // 0.25 s, at t = 0.2, 0.45, 0.7, ... s
-const DOME_HEIGHT: Real = 0.03;
-const K: Real = 10.0;
-const C: Real = 0.1;
-const DENSITY: Real = 15.0;
-const DEPTH: Real = 0.006;
-const CLEARANCE: Real = 0.02;
-const STAGGER: Real = 0.5;
-
-// A tool's path, in seconds from its start.
-const DESCEND: Real = 0.3;
-const PRESS: Real = 0.35;
-const DRAG: Real = 1.5;
-const HOLD: Real = 0.35;
-const LIFT: Real = 0.3;
-const ACTIVE: Real = DESCEND + PRESS + DRAG + HOLD + LIFT;
-
-#[derive(Copy, Clone, Debug)]
-enum Shape {
-    Ball(Real),
-    /// Half extents.
-    Cuboid(Real, Real, Real),
-}
-
-impl Shape {
-    fn collider(self) -> ColliderBuilder {
-        match self {
-            Shape::Ball(r) => ColliderBuilder::ball(r),
-            Shape::Cuboid(x, y, z) => ColliderBuilder::cuboid(x, y, z),
-        }
-    }
-    fn describe(self) -> String {
-        match self {
-            Shape::Ball(r) => format!("ball r = {:.0} mm", r * 1e3),
-            Shape::Cuboid(x, y, z) => format!(
-                "cuboid {:.0} x {:.0} x {:.0} mm, pitched 23 deg",
-                2e3 * x,
-                2e3 * y,
-                2e3 * z
-            ),
-        }
-    }
-}
-
-struct ToolSpec {
-    shape: Shape,
-    /// Orientation (scaled axis, rad).
-    tilt: Vector,
-    /// Where it comes down and where the drag ends (u, v) = (x, z).
-    from: [Real; 2],
-    to: [Real; 2],
-}
-
-fn tools() -> [ToolSpec; 6] {
-    let ball = |r: Real, from: [Real; 2], to: [Real; 2]| ToolSpec {
-        shape: Shape::Ball(r),
-        tilt: Vector::ZERO,
-        from,
-        to,
-    };
-    [
-        ball(0.010, [0.045, 0.022], [0.045, -0.018]),
-        ball(0.008, [-0.035, 0.022], [-0.005, 0.025]),
-        ToolSpec {
-            shape: Shape::Cuboid(0.008, 0.004, 0.006),
-            // Pitched about z: the +x (leading) bottom edge up.
-            tilt: Vector::new(0.0, 0.0, 0.4),
-            from: [-0.012, 0.0],
-            to: [0.018, 0.002],
-        },
-        ball(0.012, [-0.03, -0.025], [0.0, -0.03]),
-        ball(0.007, [0.012, 0.028], [0.035, 0.025]),
-        ball(0.009, [0.062, 0.018], [0.062, -0.005]),
-    ]
-}
-
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-enum Phase {
-    Waiting,
-    Descending,
-    Pressing,
-    Dragging,
-    Holding,
-    Lifting,
-    Done,
-}
-
-fn smooth(x: Real) -> Real {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
-}
-
-/// Tool `k`'s spot (u, v), the depth of its lowest point below the home surface (negative:
-/// above) and its phase at time `t`.
-fn script(spec: &ToolSpec, k: usize, t: Real) -> ([Real; 2], Real, Phase) {
-    let s = t - k as Real * STAGGER;
-    let lerp = |x: Real| {
-        [
-            spec.from[0] + (spec.to[0] - spec.from[0]) * x,
-            spec.from[1] + (spec.to[1] - spec.from[1]) * x,
-        ]
-    };
-    let t1 = DESCEND;
-    let t2 = t1 + PRESS;
-    let t3 = t2 + DRAG;
-    let t4 = t3 + HOLD;
-    if s < 0.0 {
-        (spec.from, -CLEARANCE, Phase::Waiting)
-    } else if s < t1 {
-        let d = -CLEARANCE + (DEPTH + CLEARANCE) * smooth(s / DESCEND);
-        (spec.from, d, Phase::Descending)
-    } else if s < t2 {
-        (spec.from, DEPTH, Phase::Pressing)
-    } else if s < t3 {
-        (lerp(smooth((s - t2) / DRAG)), DEPTH, Phase::Dragging)
-    } else if s < t4 {
-        (spec.to, DEPTH, Phase::Holding)
-    } else if s < ACTIVE {
-        let d = DEPTH - (DEPTH + CLEARANCE) * smooth((s - t4) / LIFT);
-        (spec.to, d, Phase::Lifting)
-    } else {
-        (spec.to, -CLEARANCE, Phase::Done)
-    }
-}
-
-/// A dome over the planar mesh: the solution of the graph Poisson problem `L h = 1` with
-/// `h = 0` on `boundary` (SOR), scaled to a peak of 1.
-fn dome(mesh: &SurfaceMesh, boundary: &[u32]) -> Vec<Real> {
-    let n = mesh.num_vertices();
-    let mut adjacent: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            if !adjacent[a].contains(&b) {
-                adjacent[a].push(b);
-                adjacent[b].push(a);
-            }
-        }
-    }
-    let mut fixed = vec![false; n];
-    for &b in boundary {
-        fixed[b as usize] = true;
-    }
-    let mut h = vec![0.0f64; n];
-    for _ in 0..20_000 {
-        let mut change = 0.0f64;
-        for i in (0..n).filter(|&i| !fixed[i]) {
-            let sum: f64 = adjacent[i].iter().map(|&j| h[j]).sum();
-            let delta = 1.8 * ((sum + 1.0) / adjacent[i].len() as f64 - h[i]);
-            h[i] += delta;
-            change = change.max(delta.abs());
-        }
-        if change < 1e-12 {
-            break;
-        }
-    }
-    let top = h.iter().copied().fold(0.0, f64::max);
-    h.iter().map(|x| (x / top) as Real).collect()
-}
-
-/// Upward unit normals at the vertices: area-weighted sums of the triangle normals.
-fn vertex_normals(vertices: &[Vector], triangles: &[[u32; 3]]) -> Vec<Vector> {
-    let mut n = vec![Vector::ZERO; vertices.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| vertices[i as usize]);
-        let f = (b - a).cross(c - a);
-        for &i in t {
-            n[i as usize] += f;
-        }
-    }
-    n.into_iter()
-        .map(|v| {
-            let v = v.normalize();
-            if v.y < 0.0 {
-                -v
-            } else {
-                v
-            }
-        })
-        .collect()
-}
-
-/// The home surface's height over (u, v): interpolated in the planar triangle containing it.
-fn home_height(flat: &SurfaceMesh, heights: &[Real], u: Real, v: Real) -> Real {
-    for t in &flat.triangles {
-        let [a, b, c] = t.map(|i| flat.vertices[i as usize]);
-        let (e1, e2) = ((b.x - a.x, b.z - a.z), (c.x - a.x, c.z - a.z));
-        let (px, pz) = (u - a.x, v - a.z);
-        let det = e1.0 * e2.1 - e1.1 * e2.0;
-        let l1 = (px * e2.1 - pz * e2.0) / det;
-        let l2 = (e1.0 * pz - e1.1 * px) / det;
-        let l0 = 1.0 - l1 - l2;
-        if l0 >= -1e-6 && l1 >= -1e-6 && l2 >= -1e-6 {
-            let [ha, hb, hc] = t.map(|i| heights[i as usize]);
-            return l0 * ha + l1 * hb + l2 * hc;
-        }
-    }
-    panic!("({u}, {v}) is not over the organ");
-}
-
-/// The home vertex nearest to (u, v) in plan.
-fn nearest_vertex(flat: &SurfaceMesh, u: Real, v: Real) -> usize {
-    let d2 = |i: usize| (flat.vertices[i].x - u).powi(2) + (flat.vertices[i].z - v).powi(2);
-    (0..flat.num_vertices())
-        .min_by(|&a, &b| d2(a).total_cmp(&d2(b)))
-        .expect("vertices")
-}
+const DOME_HEIGHT: Real = Scene::DOME_HEIGHT;
+const K: Real = Scene::K;
+const C: Real = Scene::C;
+const DENSITY: Real = Scene::DENSITY;
+const DEPTH: Real = Scene::DEPTH;
+const STAGGER: Real = Scene::STAGGER;
+const ACTIVE: Real = Scene::ACTIVE;
 
 fn main() {
     let wall = Instant::now();
-    let (outline, target_edge) = paper_organ_outline();
-    let planar = triangulate_planar(&outline, target_edge).expect("meshes");
-    let flat = planar.mesh.clone();
-    let base = planar.boundary.clone();
-    let heights: Vec<Real> = dome(&flat, &base).iter().map(|h| h * DOME_HEIGHT).collect();
-    let vertices: Vec<Vector> = flat
-        .vertices
-        .iter()
-        .zip(&heights)
-        .map(|(v, h)| Vector::new(v.x, *h, v.z))
-        .collect();
-    let normals = vertex_normals(&vertices, &flat.triangles);
-    let n = vertices.len();
-
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    world.integration_parameters.dt = DT;
-    let organ_body = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::new(vertices, flat.triangles.clone())
-        .stiffness(K)
-        .damping(C)
-        .mass(MassDistribution::AreaDensity(DENSITY))
-        .pinned(base.iter().copied())
-        .integrator(Integrator::EXACT)
-        .build()
-        .expect("valid organ mesh");
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: SUBSTEPS,
-        collider: true,
-    };
-    let organ = set
-        .insert(surface, organ_body, &mut world, options)
-        .expect("attached");
-    let organ_collider = set.get(organ).unwrap().collider().expect("collider");
+    let mut scene = Scene::new();
+    let n = scene.flat.num_vertices();
     {
-        let s = &set.get(organ).unwrap().surface;
+        let s = scene.surface();
         let s_free: Vec<Real> = s.s_values().into_iter().filter(|&x| x > 0.0).collect();
         let total_mass: Real = (0..n as u32).map(|i| s.mass(i)).sum();
         println!(
             "organ: {n} nodes, {} triangles, {} base vertices pinned, dome {:.0} mm high, \
              {:.3} kg",
-            flat.num_triangles(),
-            base.len(),
+            scene.flat.num_triangles(),
+            scene.base.len(),
             DOME_HEIGHT * 1e3,
             total_mass
         );
@@ -335,44 +106,8 @@ fn main() {
             s.neighbour_error_bound(1),
         );
     }
-
-    let specs = tools();
-    // Each tool's lowest point relative to its centre (world axes), and how far its own
-    // boundary is straight below its centre.
-    let mut lowest = Vec::new();
-    let mut reach_down = Vec::new();
-    for spec in &specs {
-        let rot = Pose::from_parts(Vector::ZERO, Rotation::from_scaled_axis(spec.tilt));
-        let collider = spec.shape.collider().build();
-        let map = collider.shape().as_support_map().expect("convex tool");
-        lowest.push(map.support_point(&rot, -Vector::Y));
-        let down = Ray::new(-Vector::Y * 1.0, Vector::Y);
-        let toi = collider
-            .shape()
-            .cast_ray(&rot, &down, 2.0, false)
-            .expect("the ray meets the tool");
-        reach_down.push(1.0 - toi);
-    }
-    // The tool's centre over its spot, its lowest point `depth` below the home surface there.
-    let place = |k: usize, t: Real| -> (Vector, [Real; 2], Phase) {
-        let ([u, v], depth, phase) = script(&specs[k], k, t);
-        let o = lowest[k];
-        let y = home_height(&flat, &heights, u + o.x, v + o.z) - depth - o.y;
-        (Vector::new(u, y, v), [u, v], phase)
-    };
-    let mut bodies = Vec::new();
-    let mut colliders = Vec::new();
-    for (k, spec) in specs.iter().enumerate() {
-        let (at, _, _) = place(k, 0.0);
-        let b = world.insert_body(
-            RigidBodyBuilder::kinematic_position_based()
-                .translation(at)
-                .rotation(spec.tilt),
-        );
-        let c = world.insert_collider(spec.shape.collider(), Some(b));
-        set.add_tool(c, &mut world);
-        bodies.push(b);
-        colliders.push(c);
+    for (k, tool) in scene.tools.iter().enumerate() {
+        let spec = &tool.spec;
         let start = k as Real * STAGGER;
         println!(
             "tool {}: {}, down at ({:.3}, {:.3}) from t = {start:.1} s, dragged to ({:.3}, \
@@ -388,47 +123,43 @@ fn main() {
     }
     println!();
     print!("{:>5}", "t s");
-    for k in 0..specs.len() {
+    for k in 0..scene.tools.len() {
         print!(" | T{} held  |F| N", k + 1);
     }
     println!(" | disp mm | tools N | pins N | imbalance");
 
-    let steps = (END_TIME / DT).round() as usize;
-    let last_off = (specs.len() - 1) as Real * STAGGER + ACTIVE;
+    let steps = Scene::total_steps();
+    let last_off = Scene::last_lift_off();
+    let tools = scene.tools.len();
     let mut positions = Vec::new();
     let (mut max_force, mut max_disp) = (0.0f32, 0.0f32);
     let (mut max_imbalance, mut quasi_static_samples) = (0.0f32, 0usize);
     let (mut min_clearance, mut max_inside, mut max_off_boundary) = (Real::MAX, 0.0f32, 0.0f32);
-    let mut pressed_steps = vec![0usize; specs.len()];
+    let mut pressed_steps = vec![0usize; tools];
     // Per tool while dragged: sums of the force along the home normal and against the drag.
-    let mut drag_sums = vec![(0.0f32, 0.0f32, 0usize); specs.len()];
+    let mut drag_sums = vec![(0.0f32, 0.0f32, 0usize); tools];
     for step in 1..=steps {
-        let t = step as Real * DT;
-        let mut phases = Vec::new();
-        let mut spots = Vec::new();
-        for (k, b) in bodies.iter().enumerate() {
-            let (at, spot, phase) = place(k, t);
-            world.bodies[*b].set_next_kinematic_translation(at);
-            phases.push(phase);
-            spots.push(spot);
-        }
-        set.step(&mut world);
-
-        let s = &set.get(organ).unwrap().surface;
+        // Drives the tools to their poses at t, then steps the world and the organ.
+        scene.step();
+        let t = scene.time();
+        debug_assert_eq!(t, step as Real * DT);
+        let world = &scene.world;
+        let s = scene.surface();
         s.positions_into(&mut positions);
         let disp = s.max_displacement();
         max_disp = max_disp.max(disp);
-        let pins: Vector = base.iter().map(|&i| s.internal_force(i)).sum();
+        let pins = scene.pins_reaction();
         assert!(pins.is_finite(), "pin reaction at t = {t}");
-        for &i in &base {
+        for &i in &scene.base {
             assert_eq!(s.position(i), s.home(i), "base vertex {i} moved");
         }
-        let organ_pose = *world.colliders[organ_collider].position();
-        let organ_shape = world.colliders[organ_collider].shape();
+        let organ_pose = *world.colliders[scene.organ_collider].position();
+        let organ_shape = world.colliders[scene.organ_collider].shape();
         let (mut total, mut sum_abs) = (Vector::ZERO, 0.0);
         let mut row = Vec::new();
-        for (k, c) in colliders.iter().enumerate() {
-            let r = set.tool_reaction(*c).expect("tool");
+        for (k, tool) in scene.tools.iter().enumerate() {
+            let (spot, phase) = scene.script(k, t);
+            let r = scene.tool_reaction(k);
             assert!(
                 r.force.is_finite() && r.mean_force.is_finite() && r.torque.is_finite(),
                 "tool {} at t = {t}: {r:?}",
@@ -438,25 +169,19 @@ fn main() {
             sum_abs += r.force.length();
             max_force = max_force.max(r.force.length());
             row.push((r.held_vertices, r.force.length()));
-            if matches!(
-                phases[k],
-                Phase::Pressing | Phase::Dragging | Phase::Holding
-            ) {
+            if phase.is_pressed() {
                 pressed_steps[k] += 1;
-                let normal = normals[nearest_vertex(&flat, spots[k][0], spots[k][1])];
+                let normal = scene.home_normal(spot);
                 assert!(
                     r.held_vertices > 0 && r.force.dot(normal) > 0.0,
-                    "tool {} ({:?}) at t = {t}: {r:?}",
+                    "tool {} ({phase:?}) at t = {t}: {r:?}",
                     k + 1,
-                    phases[k]
                 );
-                if phases[k] == Phase::Dragging {
+                if phase == ToolPhase::Dragging {
                     // The drag direction in the surface's tangent plane.
-                    let along = Vector::new(
-                        specs[k].to[0] - specs[k].from[0],
-                        0.0,
-                        specs[k].to[1] - specs[k].from[1],
-                    );
+                    let spec = &tool.spec;
+                    let along =
+                        Vector::new(spec.to[0] - spec.from[0], 0.0, spec.to[1] - spec.from[1]);
                     let along = (along - normal * along.dot(normal)).normalize();
                     let d = &mut drag_sums[k];
                     d.0 += r.force.dot(normal);
@@ -465,8 +190,8 @@ fn main() {
                 }
             }
             // No vertex inside the tool.
-            let pose = *world.colliders[*c].position();
-            let shape = world.colliders[*c].shape();
+            let pose = *world.colliders[tool.collider].position();
+            let shape = world.colliders[tool.collider].shape();
             for p in &positions {
                 let proj = shape.project_point(&pose, *p, false);
                 if proj.is_inside {
@@ -482,16 +207,17 @@ fn main() {
             );
             let down = Ray::new(pose.translation, -Vector::Y);
             if let Some(toi) = organ_shape.cast_ray(&organ_pose, &down, 1.0, false) {
-                min_clearance = min_clearance.min(toi - reach_down[k]);
+                min_clearance = min_clearance.min(toi - tool.reach_down);
             }
         }
         // Held vertices lie on a tool's boundary.
         for (i, p) in positions.iter().enumerate() {
             if s.is_held(i as u32) {
-                let off = colliders
+                let off = scene
+                    .tools
                     .iter()
-                    .map(|c| {
-                        let col = &world.colliders[*c];
+                    .map(|tool| {
+                        let col = &world.colliders[tool.collider];
                         let proj = col.shape().project_point(col.position(), *p, false);
                         (proj.point - *p).length()
                     })
@@ -500,14 +226,7 @@ fn main() {
             }
         }
         // Quasi-static: no tool has come down or lifted off in the last 0.1 s.
-        let moving = (0..specs.len()).any(|k| {
-            [t, t - 0.1].iter().any(|&t| {
-                matches!(
-                    script(&specs[k], k, t).2,
-                    Phase::Descending | Phase::Lifting
-                )
-            })
-        });
+        let moving = !scene.quasi_static(t);
         let imbalance = (total + pins).length() / sum_abs.max(Real::MIN_POSITIVE);
         if !moving && sum_abs > 0.0 {
             max_imbalance = max_imbalance.max(imbalance);
@@ -532,7 +251,7 @@ fn main() {
             );
         }
     }
-    let final_disp = set.get(organ).unwrap().surface.max_displacement();
+    let final_disp = scene.surface().max_displacement();
     println!();
     println!(
         "largest tool force {max_force:.3} N; largest displacement {:.2} mm; largest imbalance \
@@ -565,7 +284,7 @@ fn main() {
     println!(
         "summary: steps={steps} tools={} nodes={n} max_force_n={max_force:.3} \
          max_disp_mm={:.2} final_disp_mm={:.1e} max_imbalance_pct={:.1} wall_s={:.2}",
-        specs.len(),
+        tools,
         max_disp * 1e3,
         final_disp * 1e3,
         100.0 * max_imbalance,
@@ -575,8 +294,8 @@ fn main() {
     assert!(pressed_steps.iter().all(|&p| p > 0));
     // Frictionless sliding: a ball dragged at a constant depth is resisted only by the
     // asymmetry of its dent (damping), a few per cent of its normal force.
-    for (spec, (normal, against, _)) in specs.iter().zip(&drag_sums) {
-        if let Shape::Ball(_) = spec.shape {
+    for (tool, (normal, against, _)) in scene.tools.iter().zip(&drag_sums) {
+        if let ToolShape::Ball(_) = tool.spec.shape {
             assert!(
                 against.abs() < 0.1 * normal,
                 "a dragged ball is held back: {against} vs {normal}"

@@ -6,11 +6,12 @@
 //! `side,scene,speed_mps,tunneled,max_penetration_m,resting_penetration_m,steps_to_rest,ms_per_step`.
 //! A tunneled run has no resting penetration (`NaN`) and never rests (`-1`).
 //!
+//! Each run is `rapier_touch::scenes::run_drop` (also plotted step by step by the `plots`
+//! example).
+//!
 //! Run with `cargo run --release --example penetration_compare [-- --csv]`.
 
-use rapier_touch::prelude::*;
-use rapier_touch::scenes::{box_depth_below_floor, drop_world, DropFloor, DROP_BOX_HALF};
-use std::time::Instant;
+use rapier_touch::scenes::{run_drop, DropFloor};
 
 const STEPS: usize = 180;
 
@@ -26,34 +27,7 @@ struct Row {
 }
 
 fn run(speed: f32, floor: DropFloor, with_crate: bool) -> Row {
-    let (mut w, b) = drop_world(speed, floor);
-    let mut touch = TouchPipeline::default();
-    let mut tunneled = false;
-    let mut max_pen = 0.0f32;
-    let mut rest_since: Option<usize> = None;
-    let t0 = Instant::now();
-    for i in 0..STEPS {
-        if with_crate {
-            touch.step(&mut w);
-        } else {
-            w.step();
-        }
-        let body = &w.bodies[b];
-        let pose = *body.position();
-        if pose.translation.y < 0.0 {
-            tunneled = true;
-        } else {
-            max_pen = max_pen.max(box_depth_below_floor(&pose, DROP_BOX_HALF));
-        }
-        let resting = body.linvel().length() < 0.01 && pose.translation.y >= 0.0;
-        rest_since = match (resting, rest_since) {
-            (true, None) => Some(i + 1),
-            (true, s) => s,
-            (false, _) => None,
-        };
-    }
-    let ms = t0.elapsed().as_secs_f64() * 1e3 / STEPS as f64;
-    let pose = *w.bodies[b].position();
+    let r = run_drop(speed, floor, with_crate, STEPS);
     Row {
         side: if with_crate { "touch" } else { "rapier" },
         scene: match floor {
@@ -61,19 +35,11 @@ fn run(speed: f32, floor: DropFloor, with_crate: bool) -> Row {
             DropFloor::ThinTriMesh => "thin_trimesh",
         },
         speed,
-        tunneled,
-        max_penetration: max_pen,
-        resting_penetration: if tunneled {
-            f32::NAN
-        } else {
-            box_depth_below_floor(&pose, DROP_BOX_HALF)
-        },
-        steps_to_rest: if tunneled {
-            -1
-        } else {
-            rest_since.map_or(-1, |s| s as i64)
-        },
-        ms_per_step: ms,
+        tunneled: r.tunneled(),
+        max_penetration: r.max_penetration,
+        resting_penetration: r.resting_penetration,
+        steps_to_rest: r.steps_to_rest.map_or(-1, |s| s as i64),
+        ms_per_step: r.seconds * 1e3 / STEPS as f64,
     }
 }
 

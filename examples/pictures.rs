@@ -12,20 +12,19 @@
 //!   step force after 10 s (stiff regime of `plate_step_force`, exact filter: the static
 //!   deflection), coloured by displacement, the shape drawn with the displacement × 3, the
 //!   force as a red arrow.
-//! - `fig7_organ.png`: the 790-node organ of `constrained_790` at t = 5 s (exact filter),
-//!   coloured by displacement, its pinned internal polyline in black, the six force groups'
-//!   forces at that time as red arrows.
+//! - `fig7_organ.png`: the 790-node organ of `constrained_790` (`scenes::Fig7Organ`) at
+//!   t = 5 s (exact filter), coloured by displacement, its pinned internal polyline in black,
+//!   the six force groups' forces at that time as red arrows.
 //!
 //! Run with `cargo run --release --features render --example pictures [output dir]`
 //! (default `docs/img`).
 
 use rapier_touch::prelude::*;
 use rapier_touch::render::{Camera, Color, Legend, MeshStyle, Projection, Scene};
-use rapier_touch::scenes::fig4_scenes;
+use rapier_touch::scenes::{fig4_scenes, Fig7Organ};
 use rapier_touch::surface::meshing::{
-    paper_organ_outline, paper_plate_outline, triangulate_planar, PAPER_PLATE_TARGET_EDGE,
+    paper_plate_outline, triangulate_planar, PAPER_PLATE_TARGET_EDGE,
 };
-use std::collections::BTreeSet;
 use std::error::Error;
 use std::path::{Path, PathBuf};
 
@@ -248,116 +247,11 @@ fn fig6(dir: &Path) -> Result<(), Box<dyn Error>> {
     save(&scene, &cam, dir, "fig6_plate.png")
 }
 
-/// The force of a profile at time `t` (the crate's own evaluation is private).
-fn force_at(p: &ForceProfile, t: Real) -> Vector {
-    match *p {
-        ForceProfile::Step { force, start, end } => {
-            if t >= start && end.is_none_or(|e| t < e) {
-                force
-            } else {
-                Vector::ZERO
-            }
-        }
-        ForceProfile::Ramp {
-            force,
-            start,
-            duration,
-        } => force * ((t - start) / duration.max(1e-9)).clamp(0.0, 1.0),
-    }
-}
-
 fn fig7(dir: &Path) -> Result<(), Box<dyn Error>> {
-    let (outline, h) = paper_organ_outline();
-    let planar = triangulate_planar(&outline, h)?;
-    let mesh = &planar.mesh;
-    let polyline = planar.constrained[0].clone();
-    let pinned: BTreeSet<u32> = polyline.iter().copied().collect();
-    let mn = 0.001;
-    let r = std::f32::consts::FRAC_1_SQRT_2;
-    let forces = [
-        (
-            [0.04, 0.03],
-            ForceProfile::Step {
-                force: Vector::new(0.0, -mn, 0.0),
-                start: 0.0,
-                end: None,
-            },
-        ),
-        (
-            [-0.02, 0.03],
-            ForceProfile::Ramp {
-                force: Vector::new(0.0, mn, 0.0),
-                start: 0.0,
-                duration: 2.0,
-            },
-        ),
-        (
-            [0.07, 0.0],
-            ForceProfile::Step {
-                force: Vector::new(mn, 0.0, 0.0),
-                start: 1.0,
-                end: Some(6.0),
-            },
-        ),
-        (
-            [0.0, -0.035],
-            ForceProfile::Ramp {
-                force: Vector::new(0.0, 0.0, -mn),
-                start: 0.5,
-                duration: 3.0,
-            },
-        ),
-        (
-            [-0.035, -0.03],
-            ForceProfile::Step {
-                force: Vector::new(-mn * r, -mn * r, 0.0),
-                start: 2.0,
-                end: None,
-            },
-        ),
-        (
-            [0.055, -0.03],
-            ForceProfile::Ramp {
-                force: Vector::new(0.0, -0.6 * mn, 0.8 * mn),
-                start: 3.0,
-                duration: 2.0,
-            },
-        ),
-    ];
-    // Each site's group: the nearest free vertex and its free edge neighbours.
-    let mut adjacent = vec![BTreeSet::new(); mesh.num_vertices()];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            adjacent[t[k] as usize].insert(t[(k + 1) % 3]);
-            adjacent[t[(k + 1) % 3] as usize].insert(t[k]);
-        }
-    }
-    let groups: Vec<Vec<u32>> = forces
-        .iter()
-        .map(|([u, v], _)| {
-            let site = Vector::new(*u, 0.0, *v);
-            let dist = |i: u32| (mesh.vertices[i as usize] - site).length();
-            let centre = (0..mesh.num_vertices() as u32)
-                .filter(|i| !pinned.contains(i))
-                .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
-                .unwrap_or(0);
-            std::iter::once(centre)
-                .chain(adjacent[centre as usize].iter().copied())
-                .filter(|i| !pinned.contains(i))
-                .collect()
-        })
-        .collect();
-    let mut s = MassSpringSurfaceBuilder::new(mesh.vertices.clone(), mesh.triangles.clone())
-        .stiffness(0.1)
-        .damping(0.001)
-        .mass(MassDistribution::PerVertex(0.001))
-        .pinned(polyline.iter().copied())
-        .dt(1.0 / 60.0)
-        .integrator(Integrator::EXACT)
-        .build()?;
-    for (g, (_, profile)) in groups.iter().zip(&forces) {
-        s.add_force_schedule(g.clone(), *profile)?;
-    }
+    let organ = Fig7Organ::new();
+    let (mesh, polyline, groups) = (&organ.planar.mesh, &organ.polyline, &organ.groups);
+    let forces = Fig7Organ::forces();
+    let mut s = organ.surface(Integrator::EXACT);
     for _ in 0..300 {
         s.step();
     }
@@ -380,7 +274,7 @@ fn fig7(dir: &Path) -> Result<(), Box<dyn Error>> {
     }
     // Arrows: the group's total force, 1 mN drawn 3 mm long.
     for (g, (_, profile)) in groups.iter().zip(&forces) {
-        let f = force_at(profile, t);
+        let f = profile.force_at(t);
         let at = g.iter().map(|&i| pos[i as usize]).sum::<Vector>() / g.len() as Real;
         for &i in g {
             scene.add_point(pos[i as usize], rgba(220, 30, 30, 255), 2.0);

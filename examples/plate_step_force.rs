@@ -45,6 +45,7 @@
 //! Run with `cargo run --release --example plate_step_force`.
 
 use rapier_touch::prelude::*;
+use rapier_touch::scenes::{diverged, COMPARED_INTEGRATORS as INTEGRATORS};
 use rapier_touch::surface::meshing::{
     paper_plate_outline, triangulate_planar, PlanarMesh, PAPER_PLATE_TARGET_EDGE,
 };
@@ -56,12 +57,6 @@ const SAMPLE_EVERY: usize = 300; // t = 0, 5, 10 s
 const MASS: Real = 0.001;
 const LOADED: usize = 7;
 
-const INTEGRATORS: [(&str, Integrator); 4] = [
-    ("explicit Euler", Integrator::ExplicitEuler),
-    ("exact filter", Integrator::EXACT),
-    ("neighbour filter", Integrator::NEIGHBOUR),
-    ("Baraff-Witkin", Integrator::BARAFF_WITKIN),
-];
 const EULER: usize = 0;
 const EXACT: usize = 1;
 const NEIGHBOUR: usize = 2;
@@ -84,12 +79,6 @@ struct Run {
     /// First time at which the state was no longer finite, if it diverged.
     diverged_at: Option<Real>,
     time: Duration,
-}
-
-/// Diverged: the f64 state is no longer finite, or has grown past what the f32 accessors can
-/// report (explicit Euler spends a few steps between the two).
-fn diverged(s: &MassSpringSurface) -> bool {
-    !s.is_finite() || !s.max_displacement().is_finite() || !s.total_energy().is_finite()
 }
 
 /// The plate of regime `r`: rim pinned, 1 g per vertex, dt = 1/60 s.

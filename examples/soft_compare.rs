@@ -63,7 +63,9 @@
 //! dt, and in every configuration `touch` is stable and has a tool force. The speed ratio
 //! rapier/touch is printed, not asserted (timing).
 //!
-//! Run with `cargo run --release --example soft_compare [-- --csv]`. With `--csv` only the
+//! A progress bar on stderr counts the checks and configurations (`--quiet` hides it).
+//!
+//! Run with `cargo run --release --example soft_compare [-- --csv] [--quiet]`. With `--csv` only the
 //! header `engine,nodes,tools,dt,ms_per_step,max_displacement_m,stable,tool_force_available`
 //! and the rows are printed (`engine` is `rapier` or `touch`, `dt` in seconds).
 
@@ -71,6 +73,9 @@ use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::surface::meshing::{plate, SurfaceMesh};
 use std::time::Instant;
+
+#[path = "common/progress.rs"]
+mod progress;
 
 /// Side of the square plate (m).
 const SIZE: Real = 0.3;
@@ -491,20 +496,27 @@ fn main() {
         print_setup(&plates);
     }
 
+    // Progress: the free-surface checks, then every configuration.
+    let configs = plates.len() * 2 * DTS.len();
+    let bar = progress::bar((plates.len() * DTS.len() + configs) as u64, "soft_compare");
+
     // The premise: with this stiffness explicit integration diverges at dt = 1/60, the filter
     // does not.
     for p in &plates {
         for (dt, label, _) in DTS {
             let explicit = free_run(p, dt, Integrator::ExplicitEuler);
             let exact = free_run(p, dt, Integrator::EXACT);
+            bar.inc(1);
             if !csv {
-                println!(
-                    "free surface, {} nodes, dt = {label}, {CHECK_STEPS} steps, 10 mN on the \
-                     centre: explicit Euler {}; exact filter {}",
-                    p.nodes(),
-                    describe(explicit),
-                    describe(exact)
-                );
+                bar.suspend(|| {
+                    println!(
+                        "free surface, {} nodes, dt = {label}, {CHECK_STEPS} steps, 10 mN on the \
+                         centre: explicit Euler {}; exact filter {}",
+                        p.nodes(),
+                        describe(explicit),
+                        describe(exact)
+                    )
+                });
             }
             assert!(
                 bounded(exact),
@@ -521,7 +533,7 @@ fn main() {
         }
     }
     if !csv {
-        println!();
+        bar.suspend(|| println!());
     }
 
     let mut rows = Vec::new();
@@ -535,8 +547,13 @@ fn main() {
                     dt_label,
                     steps,
                 };
+                bar.set_message(format!(
+                    "{} nodes, {tools} tools, dt = {dt_label}",
+                    p.nodes()
+                ));
                 let rapier = run_rapier(p, &edges, cfg);
                 let touch = run_touch(p, cfg);
+                bar.inc(1);
                 assert!(
                     touch.stable,
                     "touch is stable ({} nodes, {tools} tools, dt = {dt_label}): max \
@@ -553,6 +570,8 @@ fn main() {
             }
         }
     }
+
+    bar.finish_and_clear();
 
     if csv {
         println!(

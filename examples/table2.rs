@@ -40,12 +40,17 @@
 //! neighbour weight sum is above 0.99 on the three plates; in the sweep it decreases and the
 //! neighbour filter's error increases as s grows.
 //!
-//! Run with `cargo run --release --example table2 [-- --csv]`. With `--csv` it prints only
+//! A progress bar on stderr counts the measurements (`--quiet` hides it).
+//!
+//! Run with `cargo run --release --example table2 [-- --csv] [--quiet]`. With `--csv` it prints only
 //! `nodes,s,neighbour_weight_sum,non_neighbour_weight_sum,max_rel_error_neighbour_filter` and
 //! one row per measurement (the four table rows, then the nine sweep rows).
 
 use rapier_touch::prelude::*;
 use rapier_touch::surface::meshing::{box_surface, plate, SurfaceMesh};
+
+#[path = "common/progress.rs"]
+mod progress;
 
 const K: Real = 48.0;
 const C: Real = 0.2;
@@ -205,7 +210,16 @@ fn main() {
             "0.0017",
         ),
     ];
-    let table: Vec<Measure> = meshes.iter().map(|(_, m, _, _)| measure(m, K, C)).collect();
+    let targets = [0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0];
+    let bar = progress::bar((meshes.len() + targets.len()) as u64, "table2");
+    let table: Vec<Measure> = meshes
+        .iter()
+        .map(|(_, m, _, _)| {
+            let measured = measure(m, K, C);
+            bar.inc(1);
+            measured
+        })
+        .collect();
     for (m, want) in table.iter().zip([8, 112, 512, 738]) {
         assert_eq!(m.nodes, want, "mesh node count");
     }
@@ -213,14 +227,17 @@ fn main() {
     // The sweep: scale k and c so that the mean s of the 512-node mesh hits each target.
     let mesh512 = &meshes[2].1;
     let base_s = table[2].s_mean;
-    let targets = [0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0];
     let sweep: Vec<Measure> = targets
         .iter()
         .map(|&t| {
             let scale = (t / base_s) as Real;
-            measure(mesh512, K * scale, C * scale)
+            bar.set_message(format!("sweep s = {t}"));
+            let measured = measure(mesh512, K * scale, C * scale);
+            bar.inc(1);
+            measured
         })
         .collect();
+    bar.finish_and_clear();
 
     if csv {
         println!(

@@ -7,10 +7,16 @@
 //! [`Scene::render`] paints them with [`tiny_skia`]. Triangles are drawn far to near (painter's
 //! algorithm, no depth buffer); points, segments, arrows and polygons are drawn over the meshes,
 //! in the order they were added. A built-in 3 × 5 pixel font writes the title and the legend
-//! (digits, `A`-`Z` and `.-:=/()+,`; lower case is drawn as upper case, `\n` starts a line).
+//! (digits, `A`-`Z` and `.-:=/()+,%|_'*<>[]`; lower case is drawn as upper case, `\n` starts a
+//! line); [`draw_text`] writes with it on any picture.
+//!
+//! [`plot::LinePlot`] draws line plots (numbers over time) with `plotters`' bitmap backend and
+//! the same font, so neither needs a system font library.
 
-use crate::math::{Real, Vector};
+use crate::math::{Pose, Real, Vector};
 use tiny_skia::{FillRule, LineCap, LineJoin, Paint, PathBuilder, Rect, Stroke, Transform};
+
+pub mod plot;
 
 pub use tiny_skia::{Color, Pixmap};
 
@@ -375,6 +381,31 @@ impl Scene {
         }
     }
 
+    /// Adds a parry shape at `pose` as a mesh: balls, cuboids, capsules, cylinders, cones,
+    /// convex polyhedra and triangle meshes (curved shapes tessellated). Returns `false`, adding
+    /// nothing, for other shapes.
+    pub fn add_shape(
+        &mut self,
+        shape: &dyn parry3d::shape::Shape,
+        pose: &Pose,
+        style: &MeshStyle,
+    ) -> bool {
+        use parry3d::shape::TypedShape;
+        let (vertices, triangles) = match shape.as_typed_shape() {
+            TypedShape::Ball(b) => b.to_trimesh(24, 12),
+            TypedShape::Cuboid(c) => c.to_trimesh(),
+            TypedShape::Capsule(c) => c.to_trimesh(24, 8),
+            TypedShape::Cylinder(c) => c.to_trimesh(24),
+            TypedShape::Cone(c) => c.to_trimesh(24),
+            TypedShape::ConvexPolyhedron(c) => c.to_trimesh(),
+            TypedShape::TriMesh(m) => (m.vertices().to_vec(), m.indices().to_vec()),
+            _ => return false,
+        };
+        let world: Vec<Vector> = vertices.iter().map(|v| pose.transform_point(*v)).collect();
+        self.add_mesh(&world, &triangles, style);
+        true
+    }
+
     /// Adds a dot of `radius` pixels with a dark outline.
     pub fn add_point(&mut self, p: Vector, color: Color, radius: f32) {
         self.overlays.push(Overlay::Point(p, color, radius));
@@ -666,15 +697,40 @@ fn draw_legend(pm: &mut Pixmap, l: &Legend) {
     text(pm, left(&l.title), y0 - 40.0, 2.0, &l.title, dark);
 }
 
-const FONT_CHARS: &str = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ.-:=/()+,";
+const FONT_CHARS: &str = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ.-:=/()+,%|_'*<>[]";
 /// 3 × 5 glyphs, one octal digit per row (top row first, left column the high bit).
-const FONT_BITS: [u16; 45] = [
+const FONT_BITS: [u16; 54] = [
     0o75557, 0o26227, 0o71747, 0o71717, 0o55711, 0o74717, 0o74757, 0o71122, 0o75757, 0o75717,
     0o25755, 0o65656, 0o34443, 0o65556, 0o74647, 0o74644, 0o34553, 0o55755, 0o72227, 0o11152,
     0o55655, 0o44447, 0o57755, 0o65555, 0o25552, 0o65644, 0o25563, 0o65655, 0o34216, 0o72222,
     0o55557, 0o55552, 0o55775, 0o55255, 0o55222, 0o71247, 0o00002, 0o00700, 0o02020, 0o07070,
-    0o11244, 0o24442, 0o21112, 0o02720, 0o00024,
+    0o11244, 0o24442, 0o21112, 0o02720, 0o00024, 0o51245, 0o22222, 0o00007, 0o22000, 0o05250,
+    0o12421, 0o42124, 0o64446, 0o31113,
 ];
+
+/// Writes `s` on `pixmap` with the built-in 3 × 5 pixel font, its top left corner at `(x, y)`,
+/// each font pixel `scale` pixels wide (a character advances 4 font pixels, a line 6). Lower
+/// case is drawn as upper case; characters the font lacks (see the [module docs](self)) leave
+/// a blank; `\n` starts a new line.
+///
+/// ```
+/// use rapier_touch::render::{draw_text, text_size, Color, Pixmap};
+/// let mut pm = Pixmap::new(120, 40).unwrap();
+/// draw_text(&mut pm, 4.0, 4.0, 2.0, "F = 0.25 N", Color::BLACK);
+/// assert_eq!(text_size("F = 0.25 N", 2.0), (78.0, 10.0));
+/// ```
+pub fn draw_text(pixmap: &mut Pixmap, x: f32, y: f32, scale: f32, s: &str, color: Color) {
+    text(pixmap, x, y, scale, s, color);
+}
+
+/// Width and height in pixels of `s` as [`draw_text`] writes it at `scale` (the longest
+/// line; trailing spacing excluded).
+pub fn text_size(s: &str, scale: f32) -> (f32, f32) {
+    let lines = s.lines().count().max(1);
+    let chars = s.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+    let w = (4 * chars).saturating_sub(1) as f32 * scale;
+    (w, (6 * lines - 1) as f32 * scale)
+}
 
 /// Writes `s` with its top left corner at `(x, y)`, each font pixel `scale` pixels wide.
 fn text(pm: &mut Pixmap, x: f32, y: f32, scale: f32, s: &str, c: Color) {

@@ -137,6 +137,19 @@ pub enum ForceProfile {
 }
 
 impl ForceProfile {
+    /// The force on each vertex at time `t` (s).
+    ///
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// let ramp = ForceProfile::Ramp { force: Vector::Y, start: 1.0, duration: 2.0 };
+    /// assert_eq!(ramp.force_at(0.5), Vector::ZERO);
+    /// assert_eq!(ramp.force_at(2.0), Vector::new(0.0, 0.5, 0.0));
+    /// assert_eq!(ramp.force_at(9.0), Vector::Y);
+    /// ```
+    pub fn force_at(&self, t: Real) -> Vector {
+        self.at(t as f64).as_vec3()
+    }
+
     fn at(&self, t: f64) -> DVec3 {
         match *self {
             ForceProfile::Step { force, start, end } => {

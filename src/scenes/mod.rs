@@ -1,8 +1,25 @@
 //! Reference scenes shared by the examples, tests and benchmarks (fixed, deterministic).
+//!
+//! - Rigid contact: [`fig4_scenes`], [`table1_scenes`], [`drop_world`] (with [`run_drop`]) and
+//!   [`boxes_on_trimesh_floor`].
+//! - Soft surfaces: [`Fig7Organ`] (the paper's Fig. 7 under six forces), [`MultiToolScene`]
+//!   (an organ dome pressed and dragged by six scripted tools) and [`BallOnPlateScene`] (a
+//!   dynamic ball dropped on a soft plate). Each scene owns its world and steps itself, so the
+//!   examples, the pictures and a viewer run the very same scene.
 
 use crate::geometry::generators::{extruded_polygon, icosphere, subdivided_box};
 use crate::geometry::{ContactKind, TouchMesh};
 use crate::math::{Pose, Real, Rotation, Vector};
+
+mod ball_on_plate;
+mod multi_tool;
+mod organ;
+
+pub use ball_on_plate::BallOnPlateScene;
+pub use multi_tool::{
+    multi_tool_specs, tool_script, MultiTool, MultiToolScene, ToolPhase, ToolShape, ToolSpec,
+};
+pub use organ::{diverged, Fig7Organ, COMPARED_INTEGRATORS};
 
 /// A fixed and a moving mesh with the moving one's pose before and after a step.
 #[derive(Clone, Debug)]
@@ -424,6 +441,91 @@ pub fn box_depth_below_floor(pose: &Pose, half: Real) -> Real {
         }
     }
     (-lowest).max(0.0)
+}
+
+/// One run of a [`drop_world`]: the box's penetration after every step and the figures the
+/// `penetration_compare` example reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DropRun {
+    /// How deep the box reaches below `y = 0` after each step (m; 0 above the floor). A box
+    /// that went through keeps its depth counted as it falls.
+    pub depth: Vec<Real>,
+    /// The first step (counted from 1) after which the box's centre was below the floor, if
+    /// it went through.
+    pub tunneled_at: Option<usize>,
+    /// The largest penetration at the steps the box's centre was above the floor (m).
+    pub max_penetration: Real,
+    /// The penetration after the last step (m; NaN if the box went through).
+    pub resting_penetration: Real,
+    /// The step from which the box rested to the end (speed below 1 cm/s, centre above the
+    /// floor); `None` if it never did or went through.
+    pub steps_to_rest: Option<usize>,
+    /// Wall-clock time of the whole run (s).
+    pub seconds: f64,
+}
+
+impl DropRun {
+    /// The box went through the floor.
+    pub fn tunneled(&self) -> bool {
+        self.tunneled_at.is_some()
+    }
+}
+
+/// Drops the box of [`drop_world`] at `speed` m/s onto `floor` for `steps` steps, stepped by
+/// rapier alone (`with_crate == false`: `PhysicsWorld::step`, CCD off) or by
+/// [`TouchPipeline::step`](crate::hooks::TouchPipeline::step).
+///
+/// ```
+/// use rapier_touch::scenes::{run_drop, DropFloor};
+/// let vanilla = run_drop(100.0, DropFloor::ThinTriMesh, false, 30);
+/// let touch = run_drop(100.0, DropFloor::ThinTriMesh, true, 30);
+/// assert!(vanilla.tunneled() && !touch.tunneled());
+/// assert!(touch.max_penetration < 1e-3);
+/// ```
+pub fn run_drop(speed: Real, floor: DropFloor, with_crate: bool, steps: usize) -> DropRun {
+    let (mut w, b) = drop_world(speed, floor);
+    let mut touch = crate::hooks::TouchPipeline::default();
+    let mut depth = Vec::with_capacity(steps);
+    let mut tunneled_at = None;
+    let mut max_penetration: Real = 0.0;
+    let mut rest_since: Option<usize> = None;
+    let t0 = std::time::Instant::now();
+    for i in 0..steps {
+        if with_crate {
+            touch.step(&mut w);
+        } else {
+            w.step();
+        }
+        let body = &w.bodies[b];
+        let pose = *body.position();
+        let d = box_depth_below_floor(&pose, DROP_BOX_HALF);
+        depth.push(d);
+        if pose.translation.y < 0.0 {
+            tunneled_at.get_or_insert(i + 1);
+        } else {
+            max_penetration = max_penetration.max(d);
+        }
+        let resting = body.linvel().length() < 0.01 && pose.translation.y >= 0.0;
+        rest_since = match (resting, rest_since) {
+            (true, None) => Some(i + 1),
+            (true, s) => s,
+            (false, _) => None,
+        };
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    let tunneled = tunneled_at.is_some();
+    DropRun {
+        tunneled_at,
+        max_penetration,
+        resting_penetration: if tunneled {
+            Real::NAN
+        } else {
+            depth.last().copied().unwrap_or(0.0)
+        },
+        steps_to_rest: rest_since.filter(|_| !tunneled),
+        depth,
+        seconds,
+    }
 }
 
 /// A rapier world (dt = 1/60, contact clustering off) with `n` dynamic 0.5 m boxes that never
