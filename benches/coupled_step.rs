@@ -23,7 +23,8 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::plate;
+use rapier_touch::scenes::attach_fixed;
+use rapier_touch::surface::meshing::{plate, plate_rim};
 use std::time::Duration;
 
 const SIZE: f32 = 0.3;
@@ -49,35 +50,15 @@ fn scene(side: u32, tools: usize, substeps: u32, dt: f32) -> Scene {
         ..Default::default()
     };
     world.integration_parameters.dt = dt;
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
-    let mesh = plate(SIZE, SIZE, side, side);
-    let edge = 0.5 * SIZE - 0.25 * SIZE / side as f32;
-    let rim: Vec<u32> = (0..mesh.vertices.len() as u32)
-        .filter(|&i| {
-            let v = mesh.vertices[i as usize];
-            v.x.abs() > edge || v.z.abs() > edge
-        })
-        .collect();
-    let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(SIZE, SIZE, side, side))
         .stiffness(10.0)
         .damping(0.05)
         .mass(MassDistribution::PerVertex(2e-3))
-        .pinned(rim)
+        .pinned(plate_rim(side, side))
         .integrator(Integrator::NEIGHBOUR)
         .build()
         .expect("valid plate");
-    let mut set = SurfaceSet::new();
-    let soft = set
-        .insert(
-            surface,
-            ground,
-            &mut world,
-            AttachOptions {
-                substeps,
-                collider: true,
-            },
-        )
-        .expect("attached");
+    let (mut set, soft, _) = attach_fixed(&mut world, surface, substeps);
     let spots: Vec<Vector> = (0..tools)
         .map(|k| {
             let a = k as f32 * std::f32::consts::TAU / tools as f32;

@@ -49,7 +49,7 @@ fn parry_manifolds(
 fn label(s: &Table1Scene) -> String {
     format!(
         "{}_{}e_{}v",
-        s.name, s.colliding_edges, s.colliding_vertices
+        s.name, s.known.colliding_edges, s.known.colliding_vertices
     )
 }
 
@@ -76,10 +76,10 @@ fn bench(c: &mut Criterion) {
              state {:?}, depth {:.6}, time of impact {:?}, {} patch(es) {:?}, {} candidate pairs; \
              parry: {} manifolds, {} points, deepest {:.6} (prediction {})",
             s.name,
-            s.colliding_edges,
-            s.colliding_vertices,
-            s.paper_edges,
-            s.paper_vertices,
+            s.known.colliding_edges,
+            s.known.colliding_vertices,
+            s.known.paper_edges,
+            s.known.paper_vertices,
             s.fixed.num_triangles(),
             s.moving.num_triangles(),
             cc.state,

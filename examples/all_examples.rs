@@ -28,10 +28,13 @@
 //! - *Plate (Fig. 6)*: `plate_step_force`'s 519-node plate, rim pinned, under its step force
 //!   (red arrows), regime and integrator picked in the settings (explicit Euler diverges in the
 //!   stiff regime, as the paper says: the scene then stops the surface).
-//! - *Organ (Fig. 7)*: `constrained_790`'s 788-node organ hanging on its pinned internal
-//!   polyline (black) under the six scheduled forces.
-//! - *Multi-tool*: `multi_tool`'s organ dome pressed and dragged by six tools on a loop.
-//! - *Ball on plate*: `ball_on_plate`'s dynamic ball on a soft plate (two-way coupling).
+//! - *Organ (Fig. 7)*: `constrained_790`'s 788-node organ (`scenes::Fig7Organ`) hanging on its
+//!   pinned internal polyline (black) under the six scheduled forces.
+//! - *Multi-tool*: `multi_tool`'s organ dome pressed and dragged by six tools
+//!   (`scenes::MultiToolScene`), each repeating its script every 3.5 s (it goes back to its
+//!   first spot in the air).
+//! - *Ball on plate*: `ball_on_plate`'s dynamic ball on a soft plate (`scenes::BallOnPlateScene`,
+//!   two-way coupling).
 //!
 //! In the soft scenes and *Tool proxy* every tool sits in a see-through ghost, a dynamic body
 //! that collides with nothing: the testbed's mouse grab (left-drag) only moves dynamic bodies,
@@ -40,8 +43,8 @@
 //! testbed drags in the plane facing the camera through the grabbed point: orbit the camera
 //! (right-drag) to push a tool down. `T` pauses, `S` steps, `R` restarts.
 //!
-//! The plate, organ, multi-tool and ball scenes are simplified copies of the headless
-//! examples' set-ups (same meshes and parameters, without their checks and printing).
+//! The organ, multi-tool and ball scenes are the library's, the very scenes the headless
+//! examples step, print and check; the plate is `plate_step_force`'s set-up.
 
 use kiss3d::color::Color;
 use rapier_testbed3d::{ExampleEntry, TestbedViewer};
@@ -50,10 +53,12 @@ use rapier_touch::rapier3d::prelude::{
     ActiveHooks, ColliderBuilder, ColliderHandle, InteractionGroups, PhysicsWorld,
     RigidBodyBuilder, RigidBodyHandle, SharedShape,
 };
-use rapier_touch::scenes::{box_depth_below_floor, fig4_scenes, DropFloor, DROP_BOX_HALF};
+use rapier_touch::scenes::{
+    attach_fixed, box_depth_below_floor, fig4_scenes, BallOnPlateScene, DropFloor, Fig7Organ,
+    MultiToolScene, DROP_BOX_HALF,
+};
 use rapier_touch::surface::meshing::{
-    paper_organ_outline, paper_plate_outline, plate, triangulate_planar, PlanarMesh, SurfaceMesh,
-    PAPER_PLATE_TARGET_EDGE,
+    paper_plate_outline, triangulate_planar, PAPER_PLATE_TARGET_EDGE,
 };
 use std::future::Future;
 use std::pin::Pin;
@@ -80,39 +85,28 @@ async fn main() {
     const CONTACTS: &str = "Contacts (Fig. 4)";
     const RIGID: &str = "Rigid";
     const SOFT: &str = "Soft surfaces";
-    let examples: Vec<(ExampleEntry, ExampleFn)> = vec![
-        (ExampleEntry::new(CONTACTS, "Line (edge) contact"), |v| {
+    let examples: [(&str, &str, ExampleFn); 10] = [
+        (CONTACTS, "Line (edge) contact", |v| {
             Box::pin(contact_case(v, 0))
         }),
-        (ExampleEntry::new(CONTACTS, "Face contact"), |v| {
-            Box::pin(contact_case(v, 1))
-        }),
-        (ExampleEntry::new(CONTACTS, "Vertex contact"), |v| {
-            Box::pin(contact_case(v, 2))
-        }),
-        (ExampleEntry::new(CONTACTS, "Multiple contacts"), |v| {
+        (CONTACTS, "Face contact", |v| Box::pin(contact_case(v, 1))),
+        (CONTACTS, "Vertex contact", |v| Box::pin(contact_case(v, 2))),
+        (CONTACTS, "Multiple contacts", |v| {
             Box::pin(contact_case(v, 3))
         }),
-        (ExampleEntry::new(RIGID, "Penetration comparison"), |v| {
+        (RIGID, "Penetration comparison", |v| {
             Box::pin(penetration_compare(v))
         }),
-        (ExampleEntry::new(RIGID, "Tool proxy"), |v| {
-            Box::pin(tool_proxy(v))
-        }),
-        (ExampleEntry::new(SOFT, "Plate (Fig. 6)"), |v| {
-            Box::pin(plate_fig6(v))
-        }),
-        (ExampleEntry::new(SOFT, "Organ (Fig. 7)"), |v| {
-            Box::pin(organ_fig7(v))
-        }),
-        (ExampleEntry::new(SOFT, "Multi-tool"), |v| {
-            Box::pin(multi_tool(v))
-        }),
-        (ExampleEntry::new(SOFT, "Ball on plate"), |v| {
-            Box::pin(ball_on_plate(v))
-        }),
+        (RIGID, "Tool proxy", |v| Box::pin(tool_proxy(v))),
+        (SOFT, "Plate (Fig. 6)", |v| Box::pin(plate_fig6(v))),
+        (SOFT, "Organ (Fig. 7)", |v| Box::pin(organ_fig7(v))),
+        (SOFT, "Multi-tool", |v| Box::pin(multi_tool(v))),
+        (SOFT, "Ball on plate", |v| Box::pin(ball_on_plate(v))),
     ];
-    let (entries, runs): (Vec<_>, Vec<ExampleFn>) = examples.into_iter().unzip();
+    let (entries, runs): (Vec<_>, Vec<ExampleFn>) = examples
+        .into_iter()
+        .map(|(group, name, run)| (ExampleEntry::new(group, name), run))
+        .unzip();
     let mut viewer = TestbedViewer::new(entries).await;
     // Each example owns its world and its loop; this loop starts the one the UI selected.
     loop {
@@ -162,19 +156,13 @@ fn wireframe(viewer: &mut TestbedViewer, mesh: &TouchMesh, pose: &Pose, color: C
     }
 }
 
-/// The touching vertices and edges of one mesh (touching faces show as the patch).
-fn features(
-    viewer: &mut TestbedViewer,
-    mesh: &TouchMesh,
-    pose: &Pose,
-    list: &[Feature],
-    color: Color,
-) {
+/// The touching vertices and edges of one mesh, yellow (touching faces show as the patch).
+fn features(viewer: &mut TestbedViewer, mesh: &TouchMesh, pose: &Pose, list: &[Feature]) {
     let at = |v: u32| pose.transform_point(mesh.vertices()[v as usize]);
     for f in list {
         match *f {
-            Feature::Vertex(v) => point(viewer, at(v), color, 12.0),
-            Feature::Edge([a, b]) => line(viewer, at(a), at(b), color, 4.0),
+            Feature::Vertex(v) => point(viewer, at(v), YELLOW, 12.0),
+            Feature::Edge([a, b]) => line(viewer, at(a), at(b), YELLOW, 4.0),
             Feature::Face(_) => {}
         }
     }
@@ -207,11 +195,18 @@ fn patch(viewer: &mut TestbedViewer, p: &ContactPatch, rv: Vector) {
 }
 
 /// Points the camera from `eye` at `at`, aimed left of `at` so the scene shows right of the
-/// testbed's panels (which cover the left of the window).
-fn look(viewer: &mut TestbedViewer, eye: Vector, at: Vector) {
+/// testbed's panels (which cover the left of the window), and shows the scene's first label
+/// in the example settings.
+fn look(
+    viewer: &mut TestbedViewer,
+    [eye, at]: [Vector; 2],
+    label: &'static str,
+    text: impl Into<String>,
+) {
     let right = (at - eye).cross(Vector::Y).normalize_or_zero();
     let shift = right * (0.25 * (at - eye).length());
     viewer.look_at(eye - shift, at - shift);
+    viewer.example_settings_mut().set_label(label, text);
 }
 
 fn mm(v: Vector) -> String {
@@ -229,23 +224,19 @@ fn kinds(patches: &[ContactPatch]) -> String {
 // ------------------------------------------------------------------------------------------
 // Mouse-driven tools.
 
-/// A kinematic tool and its ghost: a dynamic, collision-free body the testbed's mouse grab can
-/// move (it only grabs dynamic bodies). The tool follows the ghost.
-struct Tool {
+/// A see-through ghost: a dynamic, collision-free body the testbed's mouse grab can move (it
+/// only grabs dynamic bodies). The kinematic tool it leads follows it.
+struct Ghost {
     body: RigidBodyHandle,
     collider: ColliderHandle,
-    ghost: RigidBodyHandle,
-    ghost_collider: ColliderHandle,
     /// Grabbed once: the tool left its script and follows its ghost.
     manual: bool,
 }
 
-impl Tool {
-    fn insert(world: &mut PhysicsWorld, tool: ColliderBuilder, pose: Pose) -> Self {
-        let shape = ghost_shape(&tool.shape);
-        let body = world.insert_body(RigidBodyBuilder::kinematic_position_based().pose(pose));
-        let collider = world.insert_collider(tool, Some(body));
-        let ghost = world.insert_body(
+impl Ghost {
+    /// A ghost for a tool of `shape` at `pose` (slightly larger than the tool).
+    fn insert(world: &mut PhysicsWorld, shape: &SharedShape, pose: Pose) -> Self {
+        let body = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(pose)
                 .gravity_scale(0.0)
@@ -253,56 +244,86 @@ impl Tool {
                 .lock_rotations()
                 .additional_mass(0.1),
         );
-        let ghost_collider = world.insert_collider(
-            ColliderBuilder::new(shape)
+        let collider = world.insert_collider(
+            ColliderBuilder::new(ghost_shape(shape))
                 .density(0.0)
                 .collision_groups(InteractionGroups::none()),
-            Some(ghost),
+            Some(body),
         );
         Self {
             body,
             collider,
-            ghost,
-            ghost_collider,
             manual: false,
         }
-    }
-
-    fn colors(&self, viewer: &mut TestbedViewer) {
-        viewer.set_initial_collider_color(self.collider, STEEL);
-        viewer.set_initial_collider_color(self.ghost_collider, GHOST);
     }
 
     /// Whether the mouse holds the ghost (the testbed ties it to the cursor with a joint).
     fn grabbed(&self, world: &PhysicsWorld) -> bool {
         world
             .impulse_joints
-            .attached_joints(self.ghost)
+            .attached_joints(self.body)
             .next()
             .is_some()
     }
 
     /// The ghost's position: where the mouse wants the tool.
     fn device(&self, world: &PhysicsWorld) -> Pose {
-        *world.bodies[self.ghost].position()
+        *world.bodies[self.body].position()
     }
 
-    /// Follows the script (`Some(target)`) until first grabbed, then the ghost.
-    fn drive(&mut self, world: &mut PhysicsWorld, scripted: Option<Vector>) {
+    /// Where the tool goes: the script (`Some(target)`, the ghost is moved there) until the
+    /// ghost is first grabbed, then the ghost.
+    fn lead(&mut self, world: &mut PhysicsWorld, scripted: Option<Vector>) -> Vector {
         if self.grabbed(world) {
             self.manual = true;
         }
-        let target = match scripted {
+        match scripted {
             Some(at) if !self.manual => {
-                let ghost = &mut world.bodies[self.ghost];
+                let ghost = &mut world.bodies[self.body];
                 ghost.set_translation(at, true);
                 ghost.set_linvel(Vector::ZERO, true);
                 at
             }
             _ => self.device(world).translation,
-        };
+        }
+    }
+}
+
+/// A kinematic tool and its ghost.
+struct Tool {
+    body: RigidBodyHandle,
+    collider: ColliderHandle,
+    ghost: Ghost,
+}
+
+impl Tool {
+    fn insert(world: &mut PhysicsWorld, tool: ColliderBuilder, pose: Pose) -> Self {
+        let shape = tool.shape.clone();
+        let body = world.insert_body(RigidBodyBuilder::kinematic_position_based().pose(pose));
+        let collider = world.insert_collider(tool, Some(body));
+        let ghost = Ghost::insert(world, &shape, pose);
+        Self {
+            body,
+            collider,
+            ghost,
+        }
+    }
+
+    /// Steel tool, see-through ghost.
+    fn colors(&self, viewer: &mut TestbedViewer) {
+        tool_colors(viewer, self.collider, &self.ghost);
+    }
+
+    /// Follows the script (`Some(target)`) until first grabbed, then the ghost.
+    fn drive(&mut self, world: &mut PhysicsWorld, scripted: Option<Vector>) {
+        let target = self.ghost.lead(world, scripted);
         world.bodies[self.body].set_next_kinematic_translation(target);
     }
+}
+
+fn tool_colors(viewer: &mut TestbedViewer, tool: ColliderHandle, ghost: &Ghost) {
+    viewer.set_initial_collider_color(tool, STEEL);
+    viewer.set_initial_collider_color(ghost.collider, GHOST);
 }
 
 /// A slightly larger copy of a tool's shape for its ghost.
@@ -364,14 +385,9 @@ async fn contact_case(viewer: &mut TestbedViewer, index: usize) {
     viewer.set_world(&mut world);
     viewer.set_initial_collider_color(fixed, SLATE);
     viewer.set_initial_collider_color(moving, ORANGE_GLASS);
-    look(
-        viewer,
-        Vector::new(2.6, 2.4, 4.2),
-        Vector::new(0.0, 0.4, 0.0),
-    );
-    let settings = viewer.example_settings_mut();
-    settings.set_label("Case", scene.description);
-    settings.set_label(
+    let camera = [Vector::new(2.6, 2.4, 4.2), Vector::new(0.0, 0.4, 0.0)];
+    look(viewer, camera, "Case", scene.description);
+    viewer.example_settings_mut().set_label(
         "Mouse",
         "left-drag the orange object into the fixed one: it is walked back along the drag \
          to first touch",
@@ -401,14 +417,8 @@ async fn contact_case(viewer: &mut TestbedViewer, index: usize) {
             wireframe(viewer, &scene.moving, &touch, GREEN, 1.5);
         }
         for p in &c.patches {
-            features(
-                viewer,
-                &scene.fixed,
-                &scene.fixed_pose,
-                &p.fixed_features,
-                YELLOW,
-            );
-            features(viewer, &scene.moving, &touch, &p.moving_features, YELLOW);
+            features(viewer, &scene.fixed, &scene.fixed_pose, &p.fixed_features);
+            features(viewer, &scene.moving, &touch, &p.moving_features);
             patch(viewer, p, c.reversing_vector);
         }
         let settings = viewer.example_settings_mut();
@@ -541,12 +551,10 @@ async fn penetration_compare(viewer: &mut TestbedViewer) {
     viewer.set_world(&mut world);
     viewer.set_initial_collider_color(sides[0].collider, SLATE);
     viewer.set_initial_collider_color(sides[1].collider, ORANGE);
+    let camera = [Vector::new(0.0, 3.0, 8.0), Vector::new(0.0, 0.8, 0.0)];
     look(
         viewer,
-        Vector::new(0.0, 3.0, 8.0),
-        Vector::new(0.0, 0.8, 0.0),
-    );
-    viewer.example_settings_mut().set_label(
+        camera,
         "Boxes",
         "left: vanilla rapier (CCD off); right: TouchPipeline. Throw them with the mouse.",
     );
@@ -633,12 +641,10 @@ async fn tool_proxy(viewer: &mut TestbedViewer) {
     viewer.set_world(&mut world);
     viewer.set_initial_collider_color(block, SLATE);
     tool.colors(viewer);
+    let camera = [Vector::new(4.0, 4.5, 8.0), Vector::new(0.0, 1.0, 0.0)];
     look(
         viewer,
-        Vector::new(4.0, 4.5, 8.0),
-        Vector::new(0.0, 1.0, 0.0),
-    );
-    viewer.example_settings_mut().set_label(
+        camera,
         "Mouse",
         "left-drag the see-through ghost (the device) into the block: the tool (the proxy) \
          stops at first touch",
@@ -649,7 +655,7 @@ async fn tool_proxy(viewer: &mut TestbedViewer) {
     let mut last_rv = Vector::ZERO;
     while viewer.render_frame(&mut world).await {
         if viewer.simulating() {
-            touch.set_tool_target(tool.body, tool.device(&world));
+            touch.set_tool_target(tool.body, tool.ghost.device(&world));
             touch.step(&mut world);
             if let Some(r) = touch.reports().iter().find(|r| r.depth > 0.0) {
                 last_rv = r.reversing_vector;
@@ -668,13 +674,7 @@ async fn tool_proxy(viewer: &mut TestbedViewer) {
         let reports = touch.reports().to_vec();
         for r in &reports {
             for p in &r.patches {
-                features(
-                    viewer,
-                    &scene.fixed,
-                    &scene.fixed_pose,
-                    &p.fixed_features,
-                    YELLOW,
-                );
+                features(viewer, &scene.fixed, &scene.fixed_pose, &p.fixed_features);
                 patch(viewer, p, Vector::ZERO);
             }
         }
@@ -713,74 +713,6 @@ fn pick_integrator(viewer: &mut TestbedViewer) -> (&'static str, Integrator) {
     INTEGRATORS[i.min(INTEGRATORS.len() - 1)]
 }
 
-/// A world at 60 Hz and a fixed body for a surface.
-fn soft_world(gravity: Vector) -> (PhysicsWorld, RigidBodyHandle) {
-    let mut world = PhysicsWorld {
-        gravity,
-        ..Default::default()
-    };
-    world.integration_parameters.dt = DT;
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
-    (world, ground)
-}
-
-/// Steps rapier and the surfaces (rapier only once a surface diverged), then redraws the
-/// surface's collider. Returns `false` once diverged (explicit Euler past its stability limit).
-fn step_soft(
-    viewer: &mut TestbedViewer,
-    world: &mut PhysicsWorld,
-    set: &mut SurfaceSet,
-    h: SurfaceHandle,
-    alive: bool,
-) -> bool {
-    if !alive {
-        world.step();
-        return false;
-    }
-    set.step(world);
-    let s = set.get(h).expect("surface");
-    let collider = s.collider().expect("collider");
-    // Stopped long before the state leaves f32 (the collider's vertices): the plates are
-    // 0.3 m wide.
-    let alive = s.surface.is_finite() && s.surface.max_displacement() < 0.5;
-    // The testbed redraws only rapier's own soft bodies: rebuild the render mesh.
-    viewer.update_collider(collider, world);
-    alive
-}
-
-fn tool_label(set: &SurfaceSet, tool: &Tool) -> String {
-    let r = set.tool_reaction(tool.collider).unwrap_or_default();
-    format!(
-        "{:.4} N, {} vertices held",
-        r.force.length(),
-        r.held_vertices
-    )
-}
-
-/// The force of a schedule at time `t` (as the surface applies it).
-fn profile_at(p: &ForceProfile, t: Real) -> Vector {
-    match *p {
-        ForceProfile::Step { force, start, end } => {
-            if t >= start && end.is_none_or(|e| t < e) {
-                force
-            } else {
-                Vector::ZERO
-            }
-        }
-        ForceProfile::Ramp {
-            force,
-            start,
-            duration,
-        } => {
-            if t < start {
-                Vector::ZERO
-            } else {
-                force * ((t - start) / duration.max(Real::EPSILON)).min(1.0)
-            }
-        }
-    }
-}
-
 /// Red arrows of length `len` along `force` ending at `vertices` (drawn when it is not zero).
 fn force_arrows(
     viewer: &mut TestbedViewer,
@@ -795,6 +727,114 @@ fn force_arrows(
     for &i in vertices {
         let p = s.position(i);
         arrow(viewer, p - dir * len, p, RED, 2.0);
+    }
+}
+
+/// The Fig. 6 and Fig. 7 scenes: a surface alone in a world at 60 Hz without gravity, one
+/// surface step per rigid step (the paper's dt = 1/60 s), with a ball tool the mouse drags.
+struct SoftDemo {
+    world: PhysicsWorld,
+    set: SurfaceSet,
+    surface: SurfaceHandle,
+    collider: ColliderHandle,
+    tool: Tool,
+    /// The integrator's name.
+    name: &'static str,
+    /// Cleared once the surface diverged (explicit Euler past its stability limit): from then
+    /// on only rapier steps.
+    alive: bool,
+}
+
+impl SoftDemo {
+    /// Shows `surface` (stepped by integrator `name`) and a ball tool of `radius` at `tool_at`
+    /// through `camera` ([`look`]), with the scene's `label`.
+    fn new(
+        viewer: &mut TestbedViewer,
+        surface: MassSpringSurface,
+        name: &'static str,
+        (radius, tool_at): (Real, Vector),
+        camera: [Vector; 2],
+        (label, text): (&'static str, String),
+    ) -> Self {
+        let mut world = PhysicsWorld {
+            gravity: Vector::ZERO,
+            ..Default::default()
+        };
+        world.integration_parameters.dt = DT;
+        let (mut set, handle, collider) = attach_fixed(&mut world, surface, 1);
+        let tool = Tool::insert(
+            &mut world,
+            ColliderBuilder::ball(radius),
+            Pose::from_translation(tool_at),
+        );
+        set.add_tool(tool.collider, &mut world);
+        viewer.set_world(&mut world);
+        viewer.set_initial_collider_color(collider, TISSUE);
+        tool.colors(viewer);
+        look(viewer, camera, label, text);
+        Self {
+            world,
+            set,
+            surface: handle,
+            collider,
+            tool,
+            name,
+            alive: true,
+        }
+    }
+
+    fn surface(&self) -> &MassSpringSurface {
+        &self.set.get(self.surface).expect("surface").surface
+    }
+
+    /// Draws a frame, then takes a step if the testbed runs: the tool follows its ghost, rapier
+    /// and the surface step (rapier alone once the surface diverged) and the surface's collider
+    /// is redrawn. `false` once the UI switches or restarts.
+    async fn frame(&mut self, viewer: &mut TestbedViewer) -> bool {
+        if !viewer.render_frame(&mut self.world).await {
+            return false;
+        }
+        if viewer.simulating() {
+            self.tool.drive(&mut self.world, None);
+            if self.alive {
+                self.set.step(&mut self.world);
+                // Stopped long before the state leaves f32 (the collider's vertices): the
+                // surfaces are 0.3 m wide at most.
+                let s = self.surface();
+                self.alive = s.is_finite() && s.max_displacement() < 0.5;
+                // The testbed redraws only rapier's own soft bodies: rebuild the render mesh.
+                viewer.update_collider(self.collider, &self.world);
+            } else {
+                self.world.step();
+            }
+        }
+        true
+    }
+
+    /// The time, the largest displacement (or when the surface diverged) and the tool's force.
+    fn labels(&self, viewer: &mut TestbedViewer) {
+        let s = self.surface();
+        let time = s.time();
+        let text = if self.alive {
+            format!("{:.2} mm", s.max_displacement() * 1e3)
+        } else {
+            format!("{} diverged at t = {time:.2} s (stopped)", self.name)
+        };
+        let r = self
+            .set
+            .tool_reaction(self.tool.collider)
+            .unwrap_or_default();
+        let settings = viewer.example_settings_mut();
+        settings.set_label("Time", format!("{time:.2} s"));
+        settings.set_label("Largest displacement", text);
+        settings.set_label(
+            "Tool",
+            format!(
+                "{:.4} N, {} vertices held",
+                r.force.length(),
+                r.held_vertices
+            ),
+        );
     }
 }
 
@@ -848,422 +888,120 @@ async fn plate_fig6(viewer: &mut TestbedViewer) {
         )
         .expect("valid force");
 
-    let (mut world, ground) = soft_world(Vector::ZERO);
-    let mut set = SurfaceSet::new();
-    // One surface step per rigid step: the paper's dt = 1/60 s.
-    let options = AttachOptions {
-        substeps: 1,
-        collider: true,
-    };
-    let h = set
-        .insert(surface, ground, &mut world, options)
-        .expect("attached");
-    let plate_collider = set.get(h).and_then(|s| s.collider()).expect("collider");
-    let mut tool = Tool::insert(
-        &mut world,
-        ColliderBuilder::ball(0.015),
-        Pose::from_translation(Vector::new(0.08, 0.04, 0.03)),
+    let label = format!(
+        "{} nodes, rim pinned, step force on 7 vertices, {name}",
+        planar.mesh.num_vertices()
     );
-    set.add_tool(tool.collider, &mut world);
-    viewer.set_world(&mut world);
-    viewer.set_initial_collider_color(plate_collider, TISSUE);
-    tool.colors(viewer);
-    look(
+    let mut demo = SoftDemo::new(
         viewer,
-        Vector::new(0.2, 0.2, 0.32),
-        Vector::new(0.0, -0.01, 0.0),
+        surface,
+        name,
+        (0.015, Vector::new(0.08, 0.04, 0.03)),
+        [Vector::new(0.2, 0.2, 0.32), Vector::new(0.0, -0.01, 0.0)],
+        ("Plate", label),
     );
-    viewer.example_settings_mut().set_label(
-        "Plate",
-        format!(
-            "{} nodes, rim pinned, step force on 7 vertices, {name}",
-            planar.mesh.num_vertices()
-        ),
-    );
-
-    let mut alive = true;
-    while viewer.render_frame(&mut world).await {
-        if viewer.simulating() {
-            tool.drive(&mut world, None);
-            alive = step_soft(viewer, &mut world, &mut set, h, alive);
-        }
-        let s = &set.get(h).expect("surface").surface;
-        force_arrows(viewer, s, &loaded, down, 0.02);
-        let time = s.time();
-        let text = if alive {
-            format!("{:.2} mm", s.max_displacement() * 1e3)
-        } else {
-            format!("{name} diverged at t = {time:.2} s (stopped)")
-        };
-        let tool_text = tool_label(&set, &tool);
-        let settings = viewer.example_settings_mut();
-        settings.set_label("Time", format!("{time:.2} s"));
-        settings.set_label("Largest displacement", text);
-        settings.set_label("Tool", tool_text);
+    while demo.frame(viewer).await {
+        force_arrows(viewer, demo.surface(), &loaded, down, 0.02);
+        demo.labels(viewer);
     }
-}
-
-/// `constrained_790`'s six force sites (u, v) and profiles.
-fn organ_forces() -> [([Real; 2], ForceProfile); 6] {
-    let mn = 0.001;
-    let r = std::f32::consts::FRAC_1_SQRT_2;
-    let step =
-        |force: Vector, start: Real, end: Option<Real>| ForceProfile::Step { force, start, end };
-    let ramp = |force: Vector, start: Real, duration: Real| ForceProfile::Ramp {
-        force,
-        start,
-        duration,
-    };
-    [
-        ([0.04, 0.03], step(Vector::new(0.0, -mn, 0.0), 0.0, None)),
-        ([-0.02, 0.03], ramp(Vector::new(0.0, mn, 0.0), 0.0, 2.0)),
-        ([0.07, 0.0], step(Vector::new(mn, 0.0, 0.0), 1.0, Some(6.0))),
-        ([0.0, -0.035], ramp(Vector::new(0.0, 0.0, -mn), 0.5, 3.0)),
-        (
-            [-0.035, -0.03],
-            step(Vector::new(-mn * r, -mn * r, 0.0), 2.0, None),
-        ),
-        (
-            [0.055, -0.03],
-            ramp(Vector::new(0.0, -0.6 * mn, 0.8 * mn), 3.0, 2.0),
-        ),
-    ]
-}
-
-/// Each site's group: the free vertex nearest to it and its free edge neighbours.
-fn organ_groups(planar: &PlanarMesh, pinned: &[u32]) -> Vec<Vec<u32>> {
-    let mesh = &planar.mesh;
-    let mut adjacent = vec![Vec::new(); mesh.num_vertices()];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if !adjacent[a as usize].contains(&b) {
-                adjacent[a as usize].push(b);
-                adjacent[b as usize].push(a);
-            }
-        }
-    }
-    let free = |i: &u32| !pinned.contains(i);
-    organ_forces()
-        .iter()
-        .map(|([u, v], _)| {
-            let site = Vector::new(*u, 0.0, *v);
-            let centre = (0..mesh.num_vertices() as u32)
-                .filter(free)
-                .min_by(|&a, &b| {
-                    let da = (mesh.vertices[a as usize] - site).length();
-                    let db = (mesh.vertices[b as usize] - site).length();
-                    da.total_cmp(&db)
-                })
-                .expect("free vertices");
-            std::iter::once(centre)
-                .chain(adjacent[centre as usize].iter().copied())
-                .filter(free)
-                .collect()
-        })
-        .collect()
 }
 
 async fn organ_fig7(viewer: &mut TestbedViewer) {
-    // `constrained_790`: 788 nodes, the internal polyline pinned, the outer boundary free,
-    // k = 0.1 N/m, c = 0.001 N*s/m, 1 g per vertex, dt = 1/60 s, six scheduled forces.
+    // `scenes::Fig7Organ` (`constrained_790`): 788 nodes, the internal polyline pinned, the
+    // outer boundary free, k = 0.1 N/m, c = 0.001 N*s/m, 1 g per vertex, dt = 1/60 s, six
+    // scheduled forces.
     let (name, integrator) = pick_integrator(viewer);
-    let (outline, target_edge) = paper_organ_outline();
-    let planar = triangulate_planar(&outline, target_edge).expect("meshes");
-    let polyline = planar.constrained.first().cloned().unwrap_or_default();
-    let groups = organ_groups(&planar, &polyline);
-    let mut surface = MassSpringSurfaceBuilder::from_mesh(&planar.mesh)
-        .stiffness(0.1)
-        .damping(0.001)
-        .mass(MassDistribution::PerVertex(0.001))
-        .pinned(polyline.iter().copied())
-        .integrator(integrator)
-        .neighbour_max_error(Real::INFINITY)
-        .build()
-        .expect("valid organ mesh");
-    let forces = organ_forces();
-    for (g, (_, profile)) in groups.iter().zip(&forces) {
-        surface
-            .add_force_schedule(g.clone(), *profile)
-            .expect("valid force");
-    }
-
-    let (mut world, ground) = soft_world(Vector::ZERO);
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 1,
-        collider: true,
-    };
-    let h = set
-        .insert(surface, ground, &mut world, options)
-        .expect("attached");
-    let organ_collider = set.get(h).and_then(|s| s.collider()).expect("collider");
-    let mut tool = Tool::insert(
-        &mut world,
-        ColliderBuilder::ball(0.008),
-        Pose::from_translation(Vector::new(0.02, 0.03, 0.0)),
+    let organ = Fig7Organ::new();
+    let forces = Fig7Organ::forces();
+    let label = format!(
+        "{} nodes, {} polyline vertices pinned, six forces, {name}",
+        organ.planar.mesh.num_vertices(),
+        organ.polyline.len()
     );
-    set.add_tool(tool.collider, &mut world);
-    viewer.set_world(&mut world);
-    viewer.set_initial_collider_color(organ_collider, TISSUE);
-    tool.colors(viewer);
-    look(
+    let mut demo = SoftDemo::new(
         viewer,
-        Vector::new(0.14, 0.18, 0.24),
-        Vector::new(0.0, -0.01, 0.0),
+        organ.surface(integrator),
+        name,
+        (0.008, Vector::new(0.02, 0.03, 0.0)),
+        [Vector::new(0.14, 0.18, 0.24), Vector::new(0.0, -0.01, 0.0)],
+        ("Organ", label),
     );
-    viewer.example_settings_mut().set_label(
-        "Organ",
-        format!(
-            "{} nodes, {} polyline vertices pinned, six forces, {name}",
-            planar.mesh.num_vertices(),
-            polyline.len()
-        ),
-    );
-
-    let mut alive = true;
-    while viewer.render_frame(&mut world).await {
-        if viewer.simulating() {
-            tool.drive(&mut world, None);
-            alive = step_soft(viewer, &mut world, &mut set, h, alive);
-        }
-        let s = &set.get(h).expect("surface").surface;
+    while demo.frame(viewer).await {
+        let s = demo.surface();
         let t = s.time();
-        for (g, (_, profile)) in groups.iter().zip(&forces) {
-            force_arrows(viewer, s, g, profile_at(profile, t), 0.012);
+        for (g, (_, profile)) in organ.groups.iter().zip(&forces) {
+            force_arrows(viewer, s, g, profile.force_at(t), 0.012);
         }
-        for w in polyline.windows(2) {
+        for w in organ.polyline.windows(2) {
             line(viewer, s.position(w[0]), s.position(w[1]), BLACK, 3.0);
         }
-        let text = if alive {
-            format!("{:.2} mm", s.max_displacement() * 1e3)
-        } else {
-            format!("{name} diverged at t = {t:.2} s (stopped)")
-        };
-        let tool_text = tool_label(&set, &tool);
-        let settings = viewer.example_settings_mut();
-        settings.set_label("Time", format!("{t:.2} s"));
-        settings.set_label("Largest displacement", text);
-        settings.set_label("Tool", tool_text);
+        demo.labels(viewer);
     }
 }
 
-// Multi-tool: `multi_tool`'s organ dome and tools, on a repeating script.
+/// How long each multi-tool tool waits above the organ before it repeats its script (s).
+const MULTI_TOOL_PAUSE: Real = 0.7;
 
-const DOME_HEIGHT: Real = 0.03;
-const DEPTH: Real = 0.006;
-const CLEARANCE: Real = 0.02;
-const STAGGER: Real = 0.5;
-/// Per tool and cycle: come down, press, drag, hold, lift off, wait (s).
-const PHASES: [Real; 6] = [0.3, 0.35, 1.5, 0.35, 0.3, 0.7];
-
-/// A dome over the planar mesh: the graph Poisson problem `L h = 1` with `h = 0` on
-/// `boundary` (SOR), scaled to a peak of 1 (as in `multi_tool`).
-fn dome(mesh: &SurfaceMesh, boundary: &[u32]) -> Vec<Real> {
-    let n = mesh.num_vertices();
-    let mut adjacent: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            if !adjacent[a].contains(&b) {
-                adjacent[a].push(b);
-                adjacent[b].push(a);
-            }
-        }
-    }
-    let mut fixed = vec![false; n];
-    for &b in boundary {
-        fixed[b as usize] = true;
-    }
-    let mut h = vec![0.0f64; n];
-    for _ in 0..20_000 {
-        let mut change = 0.0f64;
-        for i in (0..n).filter(|&i| !fixed[i]) {
-            let sum: f64 = adjacent[i].iter().map(|&j| h[j]).sum();
-            let delta = 1.8 * ((sum + 1.0) / adjacent[i].len() as f64 - h[i]);
-            h[i] += delta;
-            change = change.max(delta.abs());
-        }
-        if change < 1e-12 {
-            break;
-        }
-    }
-    let top = h.iter().copied().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-    h.iter().map(|x| (x / top) as Real).collect()
-}
-
-/// The home surface's height over (u, v), interpolated in the planar triangle under it.
-fn home_height(flat: &SurfaceMesh, heights: &[Real], u: Real, v: Real) -> Real {
-    for t in &flat.triangles {
-        let [a, b, c] = t.map(|i| flat.vertices[i as usize]);
-        let (e1, e2) = ((b.x - a.x, b.z - a.z), (c.x - a.x, c.z - a.z));
-        let (px, pz) = (u - a.x, v - a.z);
-        let det = e1.0 * e2.1 - e1.1 * e2.0;
-        let l1 = (px * e2.1 - pz * e2.0) / det;
-        let l2 = (e1.0 * pz - e1.1 * px) / det;
-        let l0 = 1.0 - l1 - l2;
-        if l0 >= -1e-6 && l1 >= -1e-6 && l2 >= -1e-6 {
-            let [ha, hb, hc] = t.map(|i| heights[i as usize]);
-            return l0 * ha + l1 * hb + l2 * hc;
-        }
-    }
-    0.0
-}
-
-fn smooth(x: Real) -> Real {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
-}
-
-/// Tool `k`'s spot (u, v) and the depth of its lowest point below the home surface at `t`:
-/// `multi_tool`'s path, repeated, dragged back and forth on alternate cycles.
-fn tool_script(from: [Real; 2], to: [Real; 2], k: usize, t: Real) -> ([Real; 2], Real) {
-    let s = t - k as Real * STAGGER;
-    if s < 0.0 {
-        return (from, -CLEARANCE);
-    }
-    let cycle_len: Real = PHASES.iter().sum();
-    let cycle = (s / cycle_len).floor();
-    let (a, b) = if cycle as i64 % 2 == 0 {
-        (from, to)
+/// Where tool `k` is at time `t` in its script repeated every `ACTIVE + MULTI_TOOL_PAUSE`
+/// (3.5 s) from its start: the time to look its pose up at in the library's script.
+fn repeated_script_time(k: usize, t: Real) -> Real {
+    type S = MultiToolScene;
+    let start = k as Real * S::STAGGER;
+    if t <= start {
+        t
     } else {
-        (to, from)
-    };
-    let mut s = s - cycle * cycle_len;
-    let lerp = |x: Real| [a[0] + (b[0] - a[0]) * x, a[1] + (b[1] - a[1]) * x];
-    let [down, press, drag, hold, lift, _] = PHASES;
-    if s < down {
-        return (a, -CLEARANCE + (DEPTH + CLEARANCE) * smooth(s / down));
+        start + (t - start) % (S::ACTIVE + MULTI_TOOL_PAUSE)
     }
-    s -= down;
-    if s < press {
-        return (a, DEPTH);
-    }
-    s -= press;
-    if s < drag {
-        return (lerp(smooth(s / drag)), DEPTH);
-    }
-    s -= drag;
-    if s < hold {
-        return (b, DEPTH);
-    }
-    s -= hold;
-    if s < lift {
-        return (b, DEPTH - (DEPTH + CLEARANCE) * smooth(s / lift));
-    }
-    (b, -CLEARANCE)
 }
 
 async fn multi_tool(viewer: &mut TestbedViewer) {
-    // 788 nodes lifted into a 30 mm dome, base pinned, k = 10 N/m, c = 0.1 N*s/m, 15 kg/m²,
-    // exact filter, 17 substeps (the surface at 1020 Hz).
-    let (outline, target_edge) = paper_organ_outline();
-    let planar = triangulate_planar(&outline, target_edge).expect("meshes");
-    let flat = planar.mesh.clone();
-    let heights: Vec<Real> = dome(&flat, &planar.boundary)
+    // `scenes::MultiToolScene` (`multi_tool`): 788 nodes lifted into a 30 mm dome, base
+    // pinned, k = 10 N/m, c = 0.1 N*s/m, 15 kg/m², exact filter, 17 substeps (the surface at
+    // 1020 Hz), six tools on their scripts, each repeated, or dragged by the mouse.
+    let mut scene = MultiToolScene::new();
+    let mut ghosts: Vec<Ghost> = scene
+        .tools
         .iter()
-        .map(|h| h * DOME_HEIGHT)
-        .collect();
-    let vertices: Vec<Vector> = flat
-        .vertices
-        .iter()
-        .zip(&heights)
-        .map(|(v, h)| Vector::new(v.x, *h, v.z))
-        .collect();
-    let surface = MassSpringSurfaceBuilder::new(vertices, flat.triangles.clone())
-        .stiffness(10.0)
-        .damping(0.1)
-        .mass(MassDistribution::AreaDensity(15.0))
-        .pinned(planar.boundary.iter().copied())
-        .integrator(Integrator::EXACT)
-        .build()
-        .expect("valid organ mesh");
-    let (mut world, ground) = soft_world(Vector::ZERO);
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 17,
-        collider: true,
-    };
-    let h = set
-        .insert(surface, ground, &mut world, options)
-        .expect("attached");
-    let organ_collider = set.get(h).and_then(|s| s.collider()).expect("collider");
-
-    // `multi_tool`'s tools: five balls and a cuboid pitched like a sled, (from, to) in plan.
-    let ball = ColliderBuilder::ball;
-    let specs: [(ColliderBuilder, Vector, [Real; 2], [Real; 2]); 6] = [
-        (ball(0.010), Vector::ZERO, [0.045, 0.022], [0.045, -0.018]),
-        (ball(0.008), Vector::ZERO, [-0.035, 0.022], [-0.005, 0.025]),
-        (
-            ColliderBuilder::cuboid(0.008, 0.004, 0.006),
-            Vector::new(0.0, 0.0, 0.4),
-            [-0.012, 0.0],
-            [0.018, 0.002],
-        ),
-        (ball(0.012), Vector::ZERO, [-0.03, -0.025], [0.0, -0.03]),
-        (ball(0.007), Vector::ZERO, [0.012, 0.028], [0.035, 0.025]),
-        (ball(0.009), Vector::ZERO, [0.062, 0.018], [0.062, -0.005]),
-    ];
-    // Each tool's path and its lowest point relative to its centre (world axes).
-    let paths: Vec<([Real; 2], [Real; 2], Vector)> = specs
-        .iter()
-        .map(|(builder, tilt, from, to)| {
-            let rot = Pose::from_parts(Vector::ZERO, Rotation::from_scaled_axis(*tilt));
-            let lowest = builder
-                .shape
-                .as_support_map()
-                .map_or(Vector::ZERO, |m| m.support_point(&rot, -Vector::Y));
-            (*from, *to, lowest)
+        .map(|tool| {
+            let shape = scene.world.colliders[tool.collider].shared_shape().clone();
+            let pose = *scene.world.bodies[tool.body].position();
+            Ghost::insert(&mut scene.world, &shape, pose)
         })
         .collect();
-    let place = |k: usize, t: Real| -> Vector {
-        let (from, to, o) = paths[k];
-        let ([u, v], depth) = tool_script(from, to, k, t);
-        let y = home_height(&flat, &heights, u + o.x, v + o.z) - depth - o.y;
-        Vector::new(u, y, v)
-    };
-    // Inserted where the script starts them: a tool's first step sweeps from its pose.
-    let mut tools = Vec::new();
-    for (k, (builder, tilt, _, _)) in specs.into_iter().enumerate() {
-        let pose = Pose::from_parts(place(k, 0.0), Rotation::from_scaled_axis(tilt));
-        let tool = Tool::insert(&mut world, builder, pose);
-        set.add_tool(tool.collider, &mut world);
-        tools.push(tool);
+    viewer.set_world(&mut scene.world);
+    viewer.set_initial_collider_color(scene.organ_collider, TISSUE);
+    for (tool, ghost) in scene.tools.iter().zip(&ghosts) {
+        tool_colors(viewer, tool.collider, ghost);
     }
-    viewer.set_world(&mut world);
-    viewer.set_initial_collider_color(organ_collider, TISSUE);
-    for tool in &tools {
-        tool.colors(viewer);
-    }
+    let camera = [Vector::new(0.12, 0.16, 0.2), Vector::new(0.01, 0.01, 0.0)];
     look(
         viewer,
-        Vector::new(0.12, 0.16, 0.2),
-        Vector::new(0.01, 0.01, 0.0),
-    );
-    viewer.example_settings_mut().set_label(
+        camera,
         "Mouse",
         "left-drag a tool's ghost: it leaves its script and follows the mouse",
     );
 
-    let mut step = 0usize;
-    while viewer.render_frame(&mut world).await {
+    while viewer.render_frame(&mut scene.world).await {
         if viewer.simulating() {
-            step += 1;
-            let t = step as Real * DT;
-            for (k, tool) in tools.iter_mut().enumerate() {
-                tool.drive(&mut world, Some(place(k, t)));
+            // The end of the coming step, where the scene drives its tools.
+            let t = (scene.steps() + 1) as Real * MultiToolScene::DT;
+            for (k, ghost) in ghosts.iter_mut().enumerate() {
+                let (scripted, _, _) = scene.place(k, repeated_script_time(k, t));
+                let target = ghost.lead(&mut scene.world, Some(scripted));
+                scene.set_tool_target(k, Some(target));
             }
-            step_soft(viewer, &mut world, &mut set, h, true);
+            scene.step();
+            viewer.update_collider(scene.organ_collider, &scene.world);
         }
         let mut text = Vec::new();
-        for tool in &tools {
-            let r = set.tool_reaction(tool.collider).unwrap_or_default();
-            let at = world.bodies[tool.body].translation();
+        for (k, tool) in scene.tools.iter().enumerate() {
+            let r = scene.tool_reaction(k);
+            let at = scene.world.bodies[tool.body].translation();
             // The surface's force on the tool, 1 N drawn 10 cm long.
             arrow(viewer, at, at + r.force * 0.1, RED, 2.0);
             text.push(format!("{:.3}", r.force.length()));
         }
-        let disp = set.get(h).expect("surface").surface.max_displacement();
+        let disp = scene.surface().max_displacement();
         let settings = viewer.example_settings_mut();
         settings.set_label("Tool forces N", text.join(", "));
         settings.set_label("Largest displacement", format!("{:.2} mm", disp * 1e3));
@@ -1271,64 +1009,31 @@ async fn multi_tool(viewer: &mut TestbedViewer) {
 }
 
 async fn ball_on_plate(viewer: &mut TestbedViewer) {
-    // `ball_on_plate`: 256 nodes 20 mm apart, rim pinned, k = 30 N/m, c = 1 N*s/m, 0.05 kg,
-    // exact filter, 17 substeps; a 30 mm, 0.1 kg dynamic ball dropped from 100 mm.
-    const RADIUS: Real = 0.03;
-    const START: Vector = Vector::new(0.004, 0.1, -0.003);
-    let (mut world, ground) = soft_world(Vector::new(0.0, -9.81, 0.0));
-    let mesh = plate(0.3, 0.3, 15, 15);
-    let half = 0.15 - 1e-4;
-    let rim: Vec<u32> = (0..mesh.num_vertices() as u32)
-        .filter(|&i| {
-            let v = mesh.vertices[i as usize];
-            v.x.abs() > half || v.z.abs() > half
-        })
-        .collect();
-    let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
-        .stiffness(30.0)
-        .damping(1.0)
-        .mass(MassDistribution::Total(0.05))
-        .pinned(rim)
-        .integrator(Integrator::EXACT)
-        .build()
-        .expect("valid plate");
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 17,
-        collider: true,
-    };
-    let h = set
-        .insert(surface, ground, &mut world, options)
-        .expect("attached");
-    let plate_collider = set.get(h).and_then(|s| s.collider()).expect("collider");
-    let volume = 4.0 / 3.0 * std::f32::consts::PI * RADIUS.powi(3);
-    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(START));
-    let collider = world.insert_collider(
-        ColliderBuilder::ball(RADIUS).density(0.1 / volume),
-        Some(ball),
-    );
-    set.add_tool(collider, &mut world);
-    let weight = world.bodies[ball].mass() * 9.81;
-    viewer.set_world(&mut world);
-    viewer.set_initial_collider_color(plate_collider, TISSUE);
-    viewer.set_initial_collider_color(collider, STEEL);
+    // `scenes::BallOnPlateScene` (`ball_on_plate`): 256 nodes 20 mm apart, rim pinned,
+    // k = 30 N/m, c = 1 N*s/m, 0.05 kg, exact filter, 17 substeps; a 30 mm, 0.1 kg dynamic ball
+    // dropped from 100 mm.
+    let mut scene = BallOnPlateScene::new();
+    let weight = scene.weight();
+    viewer.set_world(&mut scene.world);
+    viewer.set_initial_collider_color(scene.plate_collider, TISSUE);
+    viewer.set_initial_collider_color(scene.ball_collider, STEEL);
+    let camera = [Vector::new(0.25, 0.22, 0.38), Vector::new(0.0, 0.0, 0.0)];
     look(
         viewer,
-        Vector::new(0.25, 0.22, 0.38),
-        Vector::new(0.0, 0.0, 0.0),
-    );
-    viewer.example_settings_mut().set_label(
+        camera,
         "Mouse",
         "left-drag the ball to lift and throw it; the plate's force is all that stops it",
     );
 
-    while viewer.render_frame(&mut world).await {
+    while viewer.render_frame(&mut scene.world).await {
         if viewer.simulating() {
-            step_soft(viewer, &mut world, &mut set, h, true);
+            scene.step();
+            viewer.update_collider(scene.plate_collider, &scene.world);
             // Fell off the plate: drop it again.
-            if world.bodies[ball].translation().y < -0.5 {
-                let b = &mut world.bodies[ball];
-                b.set_translation(START, true);
+            if scene.ball_position().y < -0.5 {
+                let world = &mut scene.world;
+                let b = &mut world.bodies[scene.ball];
+                b.set_translation(BallOnPlateScene::START, true);
                 b.set_linvel(Vector::ZERO, true);
                 // The surfaces sweep a tool from its collider's pose at the start of the
                 // step: move the collider too, or the ball sweeps up through the plate.
@@ -1337,11 +1042,11 @@ async fn ball_on_plate(viewer: &mut TestbedViewer) {
                     .propagate_modified_body_positions_to_colliders(&mut world.colliders);
             }
         }
-        let r = set.tool_reaction(collider).unwrap_or_default();
-        let at = world.bodies[ball].translation();
+        let r = scene.reaction();
+        let at = scene.ball_position();
         // The surface's force on the ball, its weight drawn 5 cm long.
         arrow(viewer, at, at + r.mean_force * (0.05 / weight), RED, 2.0);
-        let disp = set.get(h).expect("surface").surface.max_displacement();
+        let disp = scene.surface().max_displacement();
         let settings = viewer.example_settings_mut();
         settings.set_label("Ball height", format!("{:.1} mm", at.y * 1e3));
         settings.set_label(

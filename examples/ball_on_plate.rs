@@ -51,27 +51,25 @@ use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::scenes::BallOnPlateScene;
 
 type Scene = BallOnPlateScene;
-const DT: Real = Scene::DT;
-const SUBSTEPS: u32 = Scene::SUBSTEPS;
-const SIZE: Real = Scene::SIZE;
-const K: Real = Scene::K;
-const C: Real = Scene::C;
-const PLATE_MASS: Real = Scene::PLATE_MASS;
 const RADIUS: Real = Scene::RADIUS;
-const START: Vector = Scene::START;
 
 fn main() {
     let mut scene = Scene::new();
     let mass = scene.ball_mass();
     let weight = scene.weight();
     println!(
-        "plate {SIZE} x {SIZE} m, {} nodes ({} on the rim pinned), k = {K} N/m, c = {C} N*s/m \
-         per edge, {PLATE_MASS} kg, exact filter, {SUBSTEPS} substeps; ball r = {} mm, \
-         {mass:.3} kg (weight {weight:.4} N), dropped from y = {} mm",
+        "plate {size} x {size} m, {} nodes ({} on the rim pinned), k = {} N/m, c = {} N*s/m \
+         per edge, {} kg, exact filter, {} substeps; ball r = {} mm, {mass:.3} kg (weight \
+         {weight:.4} N), dropped from y = {} mm",
         scene.mesh.num_vertices(),
         scene.rim.len(),
+        Scene::K,
+        Scene::C,
+        Scene::PLATE_MASS,
+        Scene::SUBSTEPS,
         RADIUS * 1e3,
-        START.y * 1e3
+        Scene::START.y * 1e3,
+        size = Scene::SIZE,
     );
     println!(
         "{:>6} {:>8} {:>8} {:>5} {:>8} {:>8}",
@@ -85,11 +83,11 @@ fn main() {
     let mut flight: Option<(Real, Real)> = None;
     let mut bounces: Vec<Real> = Vec::new();
     let (mut y_lo, mut y_hi, mut support) = (Real::MAX, Real::MIN, 0.0);
-    let last_second = (1.0 / DT).round() as usize;
+    let last_second = (1.0 / Scene::DT).round() as usize;
     for step in 1..=steps {
         scene.step();
         let t = scene.time();
-        debug_assert_eq!(t, step as Real * DT);
+        debug_assert_eq!(t, step as Real * Scene::DT);
         let (p, v) = (scene.ball_position(), scene.ball_velocity());
         let r = scene.reaction();
         let s = scene.surface();

@@ -39,10 +39,12 @@
 //!
 //! Run with `cargo run --release --example constrained_790 [-- --quiet]`.
 
+use integrators::{print_runs, run_side_by_side, BARAFF_WITKIN, EXACT, NEIGHBOUR};
 use rapier_touch::prelude::*;
-use rapier_touch::scenes::{diverged, Fig7Organ, COMPARED_INTEGRATORS as INTEGRATORS};
-use std::time::{Duration, Instant};
+use rapier_touch::scenes::{Fig7Organ, COMPARED_INTEGRATORS as INTEGRATORS};
 
+#[path = "common/integrators.rs"]
+mod integrators;
 #[path = "common/progress.rs"]
 mod progress;
 
@@ -52,10 +54,6 @@ const SAMPLE_EVERY: usize = 150; // t = 0, 2.5, 5, 7.5, 10 s
 const MASS: Real = Fig7Organ::MASS;
 const K: Real = Fig7Organ::K;
 const C: Real = Fig7Organ::C;
-
-const EXACT: usize = 1;
-const NEIGHBOUR: usize = 2;
-const BARAFF_WITKIN: usize = 3;
 
 fn main() {
     let organ = Fig7Organ::new();
@@ -94,108 +92,47 @@ fn main() {
     }
     println!();
 
-    let samples_per_run = STEPS / SAMPLE_EVERY + 1;
-    let mut samples: Vec<Vec<Option<(Real, Real, f64)>>> =
-        vec![Vec::with_capacity(samples_per_run); INTEGRATORS.len()];
-    let mut max_rms: [Real; 4] = [0.0; 4];
-    let mut max_disp: [Real; 4] = [0.0; 4];
-    let mut diverged_at: [Option<Real>; 4] = [None; 4];
-    let mut time = [Duration::ZERO; 4];
     let bar = progress::bar(STEPS as u64 + 1, "constrained_790");
-    for step in 0..=STEPS {
+    let runs = run_side_by_side(&mut surfaces, STEPS, DT, SAMPLE_EVERY, |step, surfaces| {
         bar.inc(1);
-        for (k, s) in surfaces.iter().enumerate() {
-            // The constrained internal boundary never moves, whatever the integrator does.
+        // The constrained internal boundary never moves, whatever the integrator does.
+        for (s, (name, _)) in surfaces.iter().zip(INTEGRATORS) {
             for &p in polyline {
                 assert_eq!(
                     s.position(p),
                     s.home(p),
-                    "{}: pinned vertex {p} moved at step {step}",
-                    INTEGRATORS[k].0
+                    "{name}: pinned vertex {p} moved at step {step}"
                 );
             }
-            if diverged_at[k].is_none() && diverged(s) {
-                diverged_at[k] = Some(step as Real * DT);
-            }
-            let state = diverged_at[k].is_none().then(|| {
-                (
-                    s.max_displacement(),
-                    s.rms_difference(&surfaces[EXACT]),
-                    s.total_energy(),
-                )
-            });
-            if let Some((d, rms, _)) = state {
-                max_rms[k] = max_rms[k].max(rms);
-                max_disp[k] = max_disp[k].max(d);
-            }
-            if step % SAMPLE_EVERY == 0 {
-                samples[k].push(state);
-            }
         }
-        if step < STEPS {
-            for (k, s) in surfaces.iter_mut().enumerate() {
-                let t0 = Instant::now();
-                s.step();
-                time[k] += t0.elapsed();
-            }
-        }
-    }
-
+    });
     bar.finish_and_clear();
-    println!(
-        "{:<17} {:>5} {:>16} {:>18} {:>14}",
-        "integrator", "t s", "max disp mm", "RMS vs exact mm", "energy J"
-    );
-    for ((name, _), run) in INTEGRATORS.iter().zip(&samples) {
-        for (k, sample) in run.iter().enumerate() {
-            let t = (k * SAMPLE_EVERY) as Real * DT;
-            match sample {
-                Some((d, rms, e)) => println!(
-                    "{name:<17} {t:>5.1} {:>16.4} {:>18.3e} {e:>14.4e}",
-                    d * 1000.0,
-                    rms * 1000.0
-                ),
-                None => println!(
-                    "{name:<17} {t:>5.1} {:>16} {:>18} {:>14}",
-                    "diverged", "-", "-"
-                ),
-            }
-        }
-    }
-    for (k, (name, _)) in INTEGRATORS.iter().enumerate() {
-        let us = time[k].as_secs_f64() * 1e6 / STEPS as f64;
-        match diverged_at[k] {
-            Some(t) => println!("{name:<17} diverged at t = {t:.3} s; {us:.0} us/step"),
-            None => println!(
-                "{name:<17} max RMS vs exact over the run {:.3e} mm = {:.3} % of the exact run's \
-                 max displacement; {us:.0} us/step",
-                max_rms[k] * 1000.0,
-                100.0 * max_rms[k] / max_disp[EXACT],
-            ),
-        }
-    }
+    print_runs(&runs, STEPS, DT, SAMPLE_EVERY);
 
     // Physics checks (the pins were checked at every step above).
-    assert!(max_disp[EXACT] > 0.0, "the forces deform the organ");
+    assert!(
+        runs[EXACT].max_displacement > 0.0,
+        "the forces deform the organ"
+    );
     for k in [EXACT, NEIGHBOUR, BARAFF_WITKIN] {
         assert!(
-            diverged_at[k].is_none() && surfaces[k].is_finite(),
+            runs[k].diverged_at.is_none() && surfaces[k].is_finite(),
             "{} stays finite",
             INTEGRATORS[k].0
         );
         assert!(
-            max_disp[k] <= 2.0 * max_disp[EXACT],
+            runs[k].max_displacement <= 2.0 * runs[EXACT].max_displacement,
             "{} stays bounded",
             INTEGRATORS[k].0
         );
     }
     assert!(
-        max_rms[NEIGHBOUR] <= 0.01 * max_disp[EXACT],
+        runs[NEIGHBOUR].max_rms <= 0.01 * runs[EXACT].max_displacement,
         "the neighbour filter stays close to the exact one ({} m)",
-        max_rms[NEIGHBOUR]
+        runs[NEIGHBOUR].max_rms
     );
     assert!(
-        max_rms[BARAFF_WITKIN] <= 1e-4 * max_disp[EXACT],
+        runs[BARAFF_WITKIN].max_rms <= 1e-4 * runs[EXACT].max_displacement,
         "Baraff-Witkin with linear springs is the exact implicit step"
     );
 }

@@ -47,16 +47,12 @@ fn main() {
             println!("      moving features: {:?}", p.moving_features);
         }
         let mut kinds: Vec<_> = c.patches.iter().map(|p| format!("{:?}", p.kind)).collect();
-        let mut want: Vec<_> = scene
-            .expected_kinds
-            .iter()
-            .map(|k| format!("{k:?}"))
-            .collect();
+        let mut want: Vec<_> = scene.known.kinds.iter().map(|k| format!("{k:?}")).collect();
         kinds.sort();
         want.sort();
         assert_eq!(kinds, want, "{}: contact kinds", scene.name);
         assert!(
-            (c.reversing_vector - scene.expected_reversing).length() < 1e-4,
+            (c.reversing_vector - scene.known.reversing).length() < 1e-4,
             "{}: reversing vector",
             scene.name
         );

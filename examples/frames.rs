@@ -23,7 +23,7 @@ use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::render::{Color, Legend, MeshStyle, Projection, Scene};
 use rapier_touch::scenes::{BallOnPlateScene, MultiToolScene};
 use std::error::Error;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 #[path = "common/progress.rs"]
 mod progress;
@@ -80,12 +80,34 @@ fn add_tool(scene: &mut Scene, world: &PhysicsWorld, tool: ColliderHandle) {
     scene.add_shape(c.shape(), c.position(), &style);
 }
 
+/// The home positions of a surface's vertices.
+fn home(s: &MassSpringSurface) -> Vec<Vector> {
+    (0..s.num_vertices() as u32).map(|i| s.home(i)).collect()
+}
+
+/// Gives `scene` the displacement legend over `(0, max)`, frames `points` seen along `view`
+/// (perspective) and saves it to `path`.
 fn save(
-    scene: &Scene,
-    cam: &rapier_touch::render::Camera,
+    scene: &mut Scene,
+    max: Real,
+    points: &[Vector],
+    view: Vector,
     path: &Path,
 ) -> Result<(), Box<dyn Error>> {
-    scene.save_png(cam, W, H, path)?;
+    scene.set_legend(Legend {
+        title: "DISPL. MM".into(),
+        low: "0".into(),
+        high: format!("{:.1}", max * 1e3),
+    });
+    let cam = scene.frame(
+        points.iter().copied(),
+        view,
+        Vector::Y,
+        Projection::Perspective { fov_y: 0.6 },
+        W,
+        H,
+    );
+    scene.save_png(&cam, W, H, path)?;
     println!("wrote {}", path.display());
     Ok(())
 }
@@ -95,12 +117,9 @@ fn multi_tool(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn Er
     type S = MultiToolScene;
     let mut sim = S::new();
     // The same view and colour range in every frame: the organ and the tools' waiting height.
-    let home: Vec<Vector> = (0..sim.surface().num_vertices() as u32)
-        .map(|i| sim.surface().home(i))
-        .collect();
-    let frame_points: Vec<Vector> = home
-        .iter()
-        .flat_map(|p| [*p, *p + Vector::new(0.0, 0.03, 0.0)])
+    let frame_points: Vec<Vector> = home(sim.surface())
+        .into_iter()
+        .flat_map(|p| [p, p + Vector::new(0.0, 0.03, 0.0)])
         .collect();
     let max = 1.25 * S::DEPTH;
     let frames: Vec<usize> = (0..FRAMES)
@@ -136,20 +155,13 @@ fn multi_tool(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn Er
              RED: {held} HELD VERTICES\n\
              ARROWS: TOOL FORCE, 1 CM = 0.1 N"
         ));
-        scene.set_legend(Legend {
-            title: "DISPL. MM".into(),
-            low: "0".into(),
-            high: format!("{:.1}", max * 1e3),
-        });
-        let cam = scene.frame(
-            frame_points.iter().copied(),
+        save(
+            &mut scene,
+            max,
+            &frame_points,
             Vector::new(-0.45, -0.75, -1.0),
-            Vector::Y,
-            Projection::Perspective { fov_y: 0.6 },
-            W,
-            H,
-        );
-        save(&scene, &cam, &dir.join(format!("multi_tool_{t:.1}s.png")))?;
+            &dir.join(format!("multi_tool_{t:.1}s.png")),
+        )?;
     }
     Ok(())
 }
@@ -192,13 +204,9 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
     moments.sort_by_key(|m| m.0);
 
     let mut sim = S::new();
-    let home: Vec<Vector> = (0..sim.surface().num_vertices() as u32)
-        .map(|i| sim.surface().home(i))
-        .collect();
     // The plate's middle 0.2 m, the ball's release point and room for the dent below.
-    let frame_points: Vec<Vector> = home
-        .iter()
-        .copied()
+    let frame_points: Vec<Vector> = home(sim.surface())
+        .into_iter()
         .filter(|p| p.x.abs().max(p.z.abs()) <= 0.1)
         .chain([
             Vector::new(0.0, S::START.y + S::RADIUS, 0.0),
@@ -230,22 +238,11 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
             f.y,
             sim.weight()
         ));
-        scene.set_legend(Legend {
-            title: "DISPL. MM".into(),
-            low: "0".into(),
-            high: format!("{:.1}", max_disp * 1e3),
-        });
-        let cam = scene.frame(
-            frame_points.iter().copied(),
-            Vector::new(-0.35, -0.15, -1.0),
-            Vector::Y,
-            Projection::Perspective { fov_y: 0.6 },
-            W,
-            H,
-        );
         save(
-            &scene,
-            &cam,
+            &mut scene,
+            max_disp,
+            &frame_points,
+            Vector::new(-0.35, -0.15, -1.0),
             &dir.join(format!("ball_on_plate_{}.png", n + 1)),
         )?;
     }
@@ -253,13 +250,7 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
-    let dir = PathBuf::from(
-        progress::positional()
-            .into_iter()
-            .next()
-            .unwrap_or_else(|| "docs/img/frames".into()),
-    );
-    std::fs::create_dir_all(&dir)?;
+    let dir = progress::output_dir("docs/img/frames")?;
     let last = 0.5 + FRAME_EVERY * (FRAMES - 1) as Real;
     let multi_steps = (last / MultiToolScene::DT).round() as u64;
     let ball_steps = 2 * BallOnPlateScene::total_steps() as u64;

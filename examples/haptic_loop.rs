@@ -9,36 +9,22 @@
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::plate;
+use rapier_touch::scenes::attach_fixed;
+use rapier_touch::surface::meshing::{plate, plate_rim};
 use std::time::Instant;
 
 fn main() {
     let mut world = PhysicsWorld::default();
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
     let side = 27; // 28 x 28 = 784 nodes on a 0.3 m square
-    let mesh = plate(0.3, 0.3, side, side);
-    let rim: Vec<u32> = (0..mesh.vertices.len() as u32)
-        .filter(|&i| {
-            let v = mesh.vertices[i as usize];
-            v.x.abs() > 0.149 || v.z.abs() > 0.149
-        })
-        .collect();
-    let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(0.3, 0.3, side, side))
         .stiffness(30.0)
         .damping(0.05)
         .mass(MassDistribution::Total(0.2))
-        .pinned(rim)
+        .pinned(plate_rim(side, side))
         .integrator(Integrator::NEIGHBOUR)
         .build()
         .expect("valid plate");
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 17,
-        collider: true,
-    };
-    let h = set
-        .insert(surface, ground, &mut world, options)
-        .expect("attached");
+    let (mut set, h, _) = attach_fixed(&mut world, surface, 17);
     let rate = 60.0 * 17.0;
     let tool_body = world.insert_body(
         RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.05, 0.05, 0.0)),

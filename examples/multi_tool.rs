@@ -68,17 +68,7 @@ use rapier_touch::scenes::{MultiToolScene, ToolPhase, ToolShape};
 use std::time::Instant;
 
 type Scene = MultiToolScene;
-const DT: Real = Scene::DT;
-const SUBSTEPS: u32 = Scene::SUBSTEPS;
-const END_TIME: Real = Scene::END_TIME;
 const PRINT_EVERY: usize = 15; // 0.25 s, at t = 0.2, 0.45, 0.7, ... s
-const DOME_HEIGHT: Real = Scene::DOME_HEIGHT;
-const K: Real = Scene::K;
-const C: Real = Scene::C;
-const DENSITY: Real = Scene::DENSITY;
-const DEPTH: Real = Scene::DEPTH;
-const STAGGER: Real = Scene::STAGGER;
-const ACTIVE: Real = Scene::ACTIVE;
 
 fn main() {
     let wall = Instant::now();
@@ -93,13 +83,17 @@ fn main() {
              {:.3} kg",
             scene.flat.num_triangles(),
             scene.base.len(),
-            DOME_HEIGHT * 1e3,
+            Scene::DOME_HEIGHT * 1e3,
             total_mass
         );
         println!(
-            "k = {K} N/m, c = {C} N*s/m per edge, {DENSITY} kg/m^2, exact filter, {SUBSTEPS} \
-             substeps (surface dt {:.3} ms); s mean {:.3}, max {:.3}; the neighbour filter's \
-             error bound would be {:.3}",
+            "k = {} N/m, c = {} N*s/m per edge, {} kg/m^2, exact filter, {} substeps \
+             (surface dt {:.3} ms); s mean {:.3}, max {:.3}; the neighbour filter's error bound \
+             would be {:.3}",
+            Scene::K,
+            Scene::C,
+            Scene::DENSITY,
+            Scene::SUBSTEPS,
             s.dt() * 1e3,
             s_free.iter().sum::<Real>() / s_free.len() as Real,
             s_free.iter().copied().fold(0.0, Real::max),
@@ -108,7 +102,7 @@ fn main() {
     }
     for (k, tool) in scene.tools.iter().enumerate() {
         let spec = &tool.spec;
-        let start = k as Real * STAGGER;
+        let start = k as Real * Scene::STAGGER;
         println!(
             "tool {}: {}, down at ({:.3}, {:.3}) from t = {start:.1} s, dragged to ({:.3}, \
              {:.3}), off at t = {:.1} s",
@@ -118,7 +112,7 @@ fn main() {
             spec.from[1],
             spec.to[0],
             spec.to[1],
-            start + ACTIVE
+            start + Scene::ACTIVE
         );
     }
     println!();
@@ -142,7 +136,7 @@ fn main() {
         // Drives the tools to their poses at t, then steps the world and the organ.
         scene.step();
         let t = scene.time();
-        debug_assert_eq!(t, step as Real * DT);
+        debug_assert_eq!(t, step as Real * Scene::DT);
         let world = &scene.world;
         let s = scene.surface();
         s.positions_into(&mut positions);
@@ -278,7 +272,7 @@ fn main() {
     );
     println!(
         "{:.1} s after the last lift-off: largest displacement {:.1e} mm",
-        END_TIME - last_off,
+        Scene::END_TIME - last_off,
         final_disp * 1e3
     );
     println!(
@@ -303,7 +297,7 @@ fn main() {
         }
     }
     assert!(
-        max_disp > 0.8 * DEPTH && max_disp < 1.5 * DEPTH,
+        max_disp > 0.8 * Scene::DEPTH && max_disp < 1.5 * Scene::DEPTH,
         "the tools dent the organ without ploughing it: {max_disp} m"
     );
     assert!(

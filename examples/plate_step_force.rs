@@ -44,12 +44,15 @@
 //!
 //! Run with `cargo run --release --example plate_step_force`.
 
+use integrators::{print_runs, run_side_by_side, Run, BARAFF_WITKIN, EULER, EXACT, NEIGHBOUR};
 use rapier_touch::prelude::*;
-use rapier_touch::scenes::{diverged, COMPARED_INTEGRATORS as INTEGRATORS};
+use rapier_touch::scenes::COMPARED_INTEGRATORS as INTEGRATORS;
 use rapier_touch::surface::meshing::{
     paper_plate_outline, triangulate_planar, PlanarMesh, PAPER_PLATE_TARGET_EDGE,
 };
-use std::time::{Duration, Instant};
+
+#[path = "common/integrators.rs"]
+mod integrators;
 
 const DT: Real = 1.0 / 60.0;
 const STEPS: usize = 600; // 10 s
@@ -57,28 +60,11 @@ const SAMPLE_EVERY: usize = 300; // t = 0, 5, 10 s
 const MASS: Real = 0.001;
 const LOADED: usize = 7;
 
-const EULER: usize = 0;
-const EXACT: usize = 1;
-const NEIGHBOUR: usize = 2;
-const BARAFF_WITKIN: usize = 3;
-
 struct Regime {
     name: &'static str,
     k: Real,
     c: Real,
     force: Real,
-}
-
-/// What one integrator did over the run.
-struct Run {
-    /// (max displacement, RMS difference from exact, energy) at each sample, `None` once
-    /// diverged.
-    samples: Vec<Option<(Real, Real, f64)>>,
-    max_rms: Real,
-    max_displacement: Real,
-    /// First time at which the state was no longer finite, if it diverged.
-    diverged_at: Option<Real>,
-    time: Duration,
 }
 
 /// The plate of regime `r`: rim pinned, 1 g per vertex, dt = 1/60 s.
@@ -128,79 +114,8 @@ fn run(planar: &PlanarMesh, loaded: &[u32], r: &Regime) -> Vec<Run> {
         free.iter().copied().fold(0.0, Real::max),
         surfaces[EXACT].neighbour_error_bound(1),
     );
-    let mut runs: Vec<Run> = INTEGRATORS
-        .iter()
-        .map(|_| Run {
-            samples: Vec::new(),
-            max_rms: 0.0,
-            max_displacement: 0.0,
-            diverged_at: None,
-            time: Duration::ZERO,
-        })
-        .collect();
-    for step in 0..=STEPS {
-        let (exact, _) = surfaces.split_at(EXACT + 1);
-        let exact = &exact[EXACT];
-        for (s, run) in surfaces.iter().zip(runs.iter_mut()) {
-            if run.diverged_at.is_none() && diverged(s) {
-                run.diverged_at = Some(step as Real * DT);
-            }
-            let state = run.diverged_at.is_none().then(|| {
-                (
-                    s.max_displacement(),
-                    s.rms_difference(exact),
-                    s.total_energy(),
-                )
-            });
-            if let Some((d, rms, _)) = state {
-                run.max_rms = run.max_rms.max(rms);
-                run.max_displacement = run.max_displacement.max(d);
-            }
-            if step % SAMPLE_EVERY == 0 {
-                run.samples.push(state);
-            }
-        }
-        if step < STEPS {
-            for (s, run) in surfaces.iter_mut().zip(runs.iter_mut()) {
-                let t0 = Instant::now();
-                s.step();
-                run.time += t0.elapsed();
-            }
-        }
-    }
-    println!(
-        "{:<17} {:>5} {:>16} {:>18} {:>14}",
-        "integrator", "t s", "max disp mm", "RMS vs exact mm", "energy J"
-    );
-    for ((name, _), run) in INTEGRATORS.iter().zip(&runs) {
-        for (k, sample) in run.samples.iter().enumerate() {
-            let t = (k * SAMPLE_EVERY) as Real * DT;
-            match sample {
-                Some((d, rms, e)) => println!(
-                    "{name:<17} {t:>5.1} {:>16.4} {:>18.3e} {e:>14.4e}",
-                    d * 1000.0,
-                    rms * 1000.0
-                ),
-                None => println!(
-                    "{name:<17} {t:>5.1} {:>16} {:>18} {:>14}",
-                    "diverged", "-", "-"
-                ),
-            }
-        }
-    }
-    for ((name, _), run) in INTEGRATORS.iter().zip(&runs) {
-        let us = run.time.as_secs_f64() * 1e6 / STEPS as f64;
-        if let Some(t) = run.diverged_at {
-            println!("{name:<17} diverged at t = {t:.3} s; {us:.0} us/step");
-        } else {
-            println!(
-                "{name:<17} max RMS vs exact over the run {:.3e} mm = {:.3} % of the exact run's \
-                 max displacement; {us:.0} us/step",
-                run.max_rms * 1000.0,
-                100.0 * run.max_rms / runs[EXACT].max_displacement,
-            );
-        }
-    }
+    let runs = run_side_by_side(&mut surfaces, STEPS, DT, SAMPLE_EVERY, |_, _| {});
+    print_runs(&runs, STEPS, DT, SAMPLE_EVERY);
     let default_limit = plate_builder(planar, r)
         .integrator(Integrator::NEIGHBOUR)
         .build()

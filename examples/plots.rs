@@ -224,13 +224,7 @@ fn save(pm: &rapier_touch::render::Pixmap, dir: &Path, name: &str) -> Result<(),
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
-    let dir = PathBuf::from(
-        progress::positional()
-            .into_iter()
-            .next()
-            .unwrap_or_else(|| "docs/img".into()),
-    );
-    std::fs::create_dir_all(&dir)?;
+    let dir = progress::output_dir("docs/img")?;
     let work = MultiToolScene::total_steps() + ORGAN_STEPS + 1 + 2 * 2 * SPEEDS.len();
     let bar = progress::bar(work as u64, "plots");
     multi_tool_forces(&dir, &bar)?;

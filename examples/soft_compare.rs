@@ -71,7 +71,7 @@
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::{plate, SurfaceMesh};
+use rapier_touch::surface::meshing::{plate, plate_rim, SurfaceMesh};
 use std::time::Instant;
 
 #[path = "common/progress.rs"]
@@ -133,13 +133,7 @@ struct Plate {
 impl Plate {
     fn new(cells: u32) -> Self {
         let mesh = plate(SIZE, SIZE, cells, cells);
-        let edge = 0.5 * SIZE - 1e-4;
-        let rim = (0..mesh.vertices.len() as u32)
-            .filter(|&i| {
-                let v = mesh.vertices[i as usize];
-                v.x.abs() > edge || v.z.abs() > edge
-            })
-            .collect();
+        let rim = plate_rim(cells, cells);
         Self { mesh, rim }
     }
 

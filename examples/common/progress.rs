@@ -1,9 +1,10 @@
-//! Progress bars for the long-running examples, included with
-//! `#[path = "common/progress.rs"] mod progress;`. They are drawn on stderr, so stdout (tables,
-//! CSV) stays clean, and only when stderr is a terminal; `--quiet` hides them.
+//! Progress bars for the long-running examples, and their command line, included with
+//! `#[path = "common/progress.rs"] mod progress;`. The bars are drawn on stderr, so stdout
+//! (tables, CSV) stays clean, and only when stderr is a terminal; `--quiet` hides them.
 #![allow(dead_code)]
 
 use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
 
 /// `--quiet` is among the command-line arguments.
 pub fn quiet() -> bool {
@@ -16,6 +17,18 @@ pub fn positional() -> Vec<String> {
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect()
+}
+
+/// The output folder: the first positional argument, else `default`; created if missing.
+pub fn output_dir(default: &str) -> std::io::Result<PathBuf> {
+    let dir = PathBuf::from(
+        positional()
+            .into_iter()
+            .next()
+            .unwrap_or_else(|| default.into()),
+    );
+    std::fs::create_dir_all(&dir)?;
+    Ok(dir)
 }
 
 /// A progress bar of `len` units titled `name` on stderr; hidden with `--quiet`.

@@ -1,8 +1,9 @@
 //! A dynamic ball dropped on a soft plate: the scene of the `ball_on_plate` example.
 
-use crate::coupling::{AttachOptions, SurfaceHandle, SurfaceSet, ToolReaction};
+use super::attach_fixed;
+use crate::coupling::{SurfaceHandle, SurfaceSet, ToolReaction};
 use crate::math::{Real, Vector};
-use crate::surface::meshing::{plate, SurfaceMesh};
+use crate::surface::meshing::{plate, plate_rim, SurfaceMesh};
 use crate::surface::{Integrator, MassDistribution, MassSpringSurface, MassSpringSurfaceBuilder};
 use rapier3d::prelude::*;
 
@@ -49,19 +50,9 @@ pub struct BallOnPlateScene {
     steps: usize,
 }
 
-impl Default for BallOnPlateScene {
-    fn default() -> Self {
-        Self::new()
-    }
-}
+stepped_soft_scene!(BallOnPlateScene, 5.0);
 
 impl BallOnPlateScene {
-    /// Rigid time step (s).
-    pub const DT: Real = 1.0 / 60.0;
-    /// Surface substeps per rigid step.
-    pub const SUBSTEPS: u32 = 17;
-    /// Length of the run (s).
-    pub const END_TIME: Real = 5.0;
     /// Side of the square plate (m).
     pub const SIZE: Real = 0.3;
     /// Cells along each side of the plate.
@@ -88,15 +79,8 @@ impl BallOnPlateScene {
             ..Default::default()
         };
         world.integration_parameters.dt = Self::DT;
-        let ground = world.insert_body(RigidBodyBuilder::fixed());
         let mesh = plate(Self::SIZE, Self::SIZE, Self::CELLS, Self::CELLS);
-        let half = 0.5 * Self::SIZE - 1e-4;
-        let rim: Vec<u32> = (0..mesh.num_vertices() as u32)
-            .filter(|&i| {
-                let v = mesh.vertices[i as usize];
-                v.x.abs() > half || v.z.abs() > half
-            })
-            .collect();
+        let rim = plate_rim(Self::CELLS, Self::CELLS);
         let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
             .stiffness(Self::K)
             .damping(Self::C)
@@ -105,15 +89,7 @@ impl BallOnPlateScene {
             .integrator(Integrator::EXACT)
             .build()
             .expect("valid plate");
-        let mut set = SurfaceSet::new();
-        let options = AttachOptions {
-            substeps: Self::SUBSTEPS,
-            collider: true,
-        };
-        let plate = set
-            .insert(surface, ground, &mut world, options)
-            .expect("attached");
-        let plate_collider = set.get(plate).and_then(|a| a.collider()).expect("collider");
+        let (mut set, plate, plate_collider) = attach_fixed(&mut world, surface, Self::SUBSTEPS);
 
         let volume = 4.0 / 3.0 * std::f32::consts::PI * Self::RADIUS.powi(3);
         let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Self::START));
@@ -139,21 +115,6 @@ impl BallOnPlateScene {
     pub fn step(&mut self) {
         self.steps += 1;
         self.set.step(&mut self.world);
-    }
-
-    /// Rigid steps taken so far.
-    pub fn steps(&self) -> usize {
-        self.steps
-    }
-
-    /// Rigid steps of the whole run ([`Self::END_TIME`] / [`Self::DT`]).
-    pub fn total_steps() -> usize {
-        (Self::END_TIME / Self::DT).round() as usize
-    }
-
-    /// Time at the end of the last step (s).
-    pub fn time(&self) -> Real {
-        self.steps as Real * Self::DT
     }
 
     /// The plate's deformable model (positions in world coordinates: its body is fixed at the

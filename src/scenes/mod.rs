@@ -7,9 +7,50 @@
 //!   dynamic ball dropped on a soft plate). Each scene owns its world and steps itself, so the
 //!   examples, the pictures and a viewer run the very same scene.
 
+use crate::coupling::{AttachOptions, SurfaceHandle, SurfaceSet};
 use crate::geometry::generators::{extruded_polygon, icosphere, subdivided_box};
 use crate::geometry::{ContactKind, TouchMesh};
 use crate::math::{Pose, Real, Rotation, Vector};
+use crate::surface::meshing::{paper_organ_outline, triangulate_planar, PlanarMesh};
+use crate::surface::MassSpringSurface;
+use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBodyBuilder};
+
+/// What the stepped soft scenes share: `Default` (their `new`), their timing (60 Hz rigid steps
+/// with 17 surface substeps, a run of `$end_time` s) and their step count. The scene type has
+/// a private `steps: usize` field that its `step` increments.
+macro_rules! stepped_soft_scene {
+    ($scene:ty, $end_time:expr) => {
+        impl Default for $scene {
+            fn default() -> Self {
+                Self::new()
+            }
+        }
+
+        impl $scene {
+            /// Rigid time step (s).
+            pub const DT: Real = 1.0 / 60.0;
+            /// Surface substeps per rigid step.
+            pub const SUBSTEPS: u32 = 17;
+            /// Length of the run (s).
+            pub const END_TIME: Real = $end_time;
+
+            /// Rigid steps taken so far.
+            pub fn steps(&self) -> usize {
+                self.steps
+            }
+
+            /// Rigid steps of the whole run ([`Self::END_TIME`] / [`Self::DT`]).
+            pub fn total_steps() -> usize {
+                (Self::END_TIME / Self::DT).round() as usize
+            }
+
+            /// Time at the end of the last step (s).
+            pub fn time(&self) -> Real {
+                self.steps as Real * Self::DT
+            }
+        }
+    };
+}
 
 mod ball_on_plate;
 mod multi_tool;
@@ -21,9 +62,56 @@ pub use multi_tool::{
 };
 pub use organ::{diverged, Fig7Organ, COMPARED_INTEGRATORS};
 
-/// A fixed and a moving mesh with the moving one's pose before and after a step.
+/// Attaches `surface` (positions in world coordinates) to a new fixed body at the origin of
+/// `world`, in a new [`SurfaceSet`], with `substeps` surface steps per rigid step and a TriMesh
+/// collider that follows the deformed surface. Returns the set, the surface's handle and its
+/// collider. Panics if `substeps` is 0 or the surface cannot be a collider.
+///
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::rapier3d::prelude::PhysicsWorld;
+/// use rapier_touch::scenes::attach_fixed;
+/// use rapier_touch::surface::meshing::{plate, plate_rim};
+/// let mut world = PhysicsWorld::default();
+/// let surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, 4, 4))
+///     .pinned(plate_rim(4, 4))
+///     .build()
+///     .unwrap();
+/// let (set, plate, collider) = attach_fixed(&mut world, surface, 17);
+/// assert_eq!(set.get(plate).unwrap().collider(), Some(collider));
+/// assert_eq!(set.get(plate).unwrap().substeps(), 17);
+/// ```
+pub fn attach_fixed(
+    world: &mut PhysicsWorld,
+    surface: MassSpringSurface,
+    substeps: u32,
+) -> (SurfaceSet, SurfaceHandle, ColliderHandle) {
+    let body = world.insert_body(RigidBodyBuilder::fixed());
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps,
+        collider: true,
+    };
+    let handle = set.insert(surface, body, world, options).expect("attached");
+    let collider = set
+        .get(handle)
+        .and_then(|a| a.collider())
+        .expect("collider");
+    (set, handle, collider)
+}
+
+/// [`paper_organ_outline`] meshed with its own target edge (5.28 mm): the 788-node organ of
+/// [`Fig7Organ`] and [`MultiToolScene`].
+fn paper_organ() -> PlanarMesh {
+    let (outline, target_edge) = paper_organ_outline();
+    triangulate_planar(&outline, target_edge).expect("the organ meshes")
+}
+
+/// A fixed and a moving mesh with the moving one's pose before and after a step, and what is
+/// known about the pair (`T`): [`Fig4Expected`] for the [`fig4_scenes`], [`Table1Sizes`] for
+/// the [`table1_scenes`].
 #[derive(Clone, Debug)]
-pub struct ContactScene {
+pub struct ContactScene<T = Fig4Expected> {
     /// Short name.
     pub name: &'static str,
     /// What the scene shows.
@@ -38,10 +126,17 @@ pub struct ContactScene {
     pub pose: Pose,
     /// Its pose before the step.
     pub prev_pose: Pose,
-    /// The contact kind of every patch the reconstruction should find, in no particular order.
-    pub expected_kinds: Vec<ContactKind>,
-    /// The expected reversing vector.
-    pub expected_reversing: Vector,
+    /// What is known about the pair.
+    pub known: T,
+}
+
+/// What the reconstruction should find in one of the [`fig4_scenes`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fig4Expected {
+    /// The contact kind of every patch, in no particular order.
+    pub kinds: Vec<ContactKind>,
+    /// The reversing vector.
+    pub reversing: Vector,
 }
 
 fn cuboid(half: Vector) -> TouchMesh {
@@ -102,8 +197,10 @@ pub fn fig4_scenes() -> Vec<ContactScene> {
             moving: cube.clone(),
             pose: Pose::from_parts(Vector::new(0.2, half_diag - 0.1, 0.1), rot_edge),
             prev_pose: Pose::from_parts(Vector::new(0.2, half_diag + 0.3, 0.1), rot_edge),
-            expected_kinds: vec![ContactKind::Edge],
-            expected_reversing: Vector::new(0.0, 0.1, 0.0),
+            known: Fig4Expected {
+                kinds: vec![ContactKind::Edge],
+                reversing: Vector::new(0.0, 0.1, 0.0),
+            },
         },
         ContactScene {
             name: "face",
@@ -115,8 +212,10 @@ pub fn fig4_scenes() -> Vec<ContactScene> {
             prev_pose: Pose::from_translation(Vector::new(-0.2, 0.85, 0.1)),
             // |D| along y is 0.5 of |D| = 0.5477: walking back 0.15 in y walks back 0.2 in x
             // times 0.15/0.5 = 0.06 and 0.03 in z.
-            expected_kinds: vec![ContactKind::Face],
-            expected_reversing: Vector::new(-0.06, 0.15, 0.03),
+            known: Fig4Expected {
+                kinds: vec![ContactKind::Face],
+                reversing: Vector::new(-0.06, 0.15, 0.03),
+            },
         },
         ContactScene {
             name: "vertex",
@@ -126,8 +225,10 @@ pub fn fig4_scenes() -> Vec<ContactScene> {
             moving: cube,
             pose: Pose::from_parts(Vector::new(-0.4, corner - 0.05, 0.3), rot_vertex),
             prev_pose: Pose::from_parts(Vector::new(-0.4, corner + 0.45, 0.3), rot_vertex),
-            expected_kinds: vec![ContactKind::Vertex],
-            expected_reversing: Vector::new(0.0, 0.05, 0.0),
+            known: Fig4Expected {
+                kinds: vec![ContactKind::Vertex],
+                reversing: Vector::new(0.0, 0.05, 0.0),
+            },
         },
         ContactScene {
             name: "multi_point",
@@ -144,33 +245,22 @@ pub fn fig4_scenes() -> Vec<ContactScene> {
                 Vector::new(0.0, 1.0 + tip_drop + 0.25, 0.0),
                 Rotation::from_rotation_x(tilt),
             ),
-            expected_kinds: vec![ContactKind::Vertex, ContactKind::Vertex],
-            expected_reversing: Vector::new(0.0, 0.05, 0.0),
+            known: Fig4Expected {
+                kinds: vec![ContactKind::Vertex, ContactKind::Vertex],
+                reversing: Vector::new(0.0, 0.05, 0.0),
+            },
         },
     ]
 }
 
 /// One of the four pairs whose sizes reproduce the paper's Table I (benchmarked in
 /// `benches/reconstruction.rs`).
-///
-/// Sizes are "colliding edges / colliding vertices" as a collision detector like RAPID reports
-/// them: see [`colliding_features`].
-#[derive(Clone, Debug)]
-pub struct Table1Scene {
-    /// Short name.
-    pub name: &'static str,
-    /// What the scene shows.
-    pub description: &'static str,
-    /// The fixed object (closed).
-    pub fixed: TouchMesh,
-    /// Its pose.
-    pub fixed_pose: Pose,
-    /// The moving object (closed).
-    pub moving: TouchMesh,
-    /// Its pose after the step (penetrating).
-    pub pose: Pose,
-    /// Its pose before the step.
-    pub prev_pose: Pose,
+pub type Table1Scene = ContactScene<Table1Sizes>;
+
+/// The sizes of a [`Table1Scene`]: "colliding edges / colliding vertices" as a collision
+/// detector like RAPID reports them (see [`colliding_features`]), the paper's and this scene's.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct Table1Sizes {
     /// The paper's colliding-edge count for this row of Table I.
     pub paper_edges: usize,
     /// The paper's colliding-vertex count for this row of Table I.
@@ -262,10 +352,12 @@ pub fn table1_scenes() -> Vec<Table1Scene> {
             moving,
             pose,
             prev_pose: Pose::from_parts(pose.translation - TABLE1_STEP, pose.rotation),
-            paper_edges,
-            paper_vertices,
-            colliding_edges,
-            colliding_vertices,
+            known: Table1Sizes {
+                paper_edges,
+                paper_vertices,
+                colliding_edges,
+                colliding_vertices,
+            },
         }
     };
 

@@ -1,9 +1,10 @@
 //! Six rigid tools pressing and dragging on a soft organ dome: the scene of the `multi_tool`
 //! example, with its scripted tool paths.
 
-use crate::coupling::{AttachOptions, SurfaceHandle, SurfaceSet, ToolReaction};
+use super::{attach_fixed, paper_organ};
+use crate::coupling::{SurfaceHandle, SurfaceSet, ToolReaction};
 use crate::math::{Pose, Real, Rotation, Vector};
-use crate::surface::meshing::{paper_organ_outline, triangulate_planar, SurfaceMesh};
+use crate::surface::meshing::SurfaceMesh;
 use crate::surface::{Integrator, MassDistribution, MassSpringSurface, MassSpringSurfaceBuilder};
 use rapier3d::prelude::*;
 
@@ -253,6 +254,8 @@ pub struct MultiTool {
 /// assert!(scene.tool_reaction(0).force.y > 0.0); // the first tool presses from t = 0.3 s
 /// assert!(scene.surface().max_displacement() > 0.0);
 /// ```
+///
+/// [`paper_organ_outline`]: crate::surface::meshing::paper_organ_outline
 pub struct MultiToolScene {
     /// The rapier world (no gravity, dt = 1/60 s).
     pub world: PhysicsWorld,
@@ -272,22 +275,14 @@ pub struct MultiToolScene {
     pub base: Vec<u32>,
     /// Upward unit normals of the home surface at the vertices.
     pub normals: Vec<Vector>,
+    /// Where [`Self::set_tool_target`] drives each tool instead of its script.
+    targets: Vec<Option<Vector>>,
     steps: usize,
 }
 
-impl Default for MultiToolScene {
-    fn default() -> Self {
-        Self::new()
-    }
-}
+stepped_soft_scene!(MultiToolScene, 7.5);
 
 impl MultiToolScene {
-    /// Rigid time step (s).
-    pub const DT: Real = 1.0 / 60.0;
-    /// Surface substeps per rigid step.
-    pub const SUBSTEPS: u32 = 17;
-    /// Length of the run (s).
-    pub const END_TIME: Real = 7.5;
     /// Peak height of the dome (m).
     pub const DOME_HEIGHT: Real = 0.03;
     /// Stiffness of every edge (N/m).
@@ -317,8 +312,7 @@ impl MultiToolScene {
 
     /// Builds the world, the organ and the tools at their waiting poses (t = 0).
     pub fn new() -> Self {
-        let (outline, target_edge) = paper_organ_outline();
-        let planar = triangulate_planar(&outline, target_edge).expect("the organ meshes");
+        let planar = paper_organ();
         let flat = planar.mesh;
         let base = planar.boundary;
         let heights: Vec<Real> = dome(&flat, &base)
@@ -338,7 +332,6 @@ impl MultiToolScene {
             ..Default::default()
         };
         world.integration_parameters.dt = Self::DT;
-        let organ_body = world.insert_body(RigidBodyBuilder::fixed());
         let surface = MassSpringSurfaceBuilder::new(vertices, flat.triangles.clone())
             .stiffness(Self::K)
             .damping(Self::C)
@@ -347,15 +340,7 @@ impl MultiToolScene {
             .integrator(Integrator::EXACT)
             .build()
             .expect("valid organ mesh");
-        let mut set = SurfaceSet::new();
-        let options = AttachOptions {
-            substeps: Self::SUBSTEPS,
-            collider: true,
-        };
-        let organ = set
-            .insert(surface, organ_body, &mut world, options)
-            .expect("attached");
-        let organ_collider = set.get(organ).and_then(|a| a.collider()).expect("collider");
+        let (set, organ, organ_collider) = attach_fixed(&mut world, surface, Self::SUBSTEPS);
 
         let mut scene = MultiToolScene {
             world,
@@ -367,6 +352,7 @@ impl MultiToolScene {
             heights,
             base,
             normals,
+            targets: Vec::new(),
             steps: 0,
         };
         for spec in multi_tool_specs() {
@@ -401,35 +387,29 @@ impl MultiToolScene {
             scene.tools[k].body = b;
             scene.tools[k].collider = c;
         }
+        scene.targets = vec![None; scene.tools.len()];
         scene
     }
 
     /// One rigid step: every tool's kinematic target is set to its scripted pose at the end
-    /// of the step, then [`SurfaceSet::step`] runs rapier's step and the organ's substeps.
+    /// of the step (or to where [`Self::set_tool_target`] put it), then [`SurfaceSet::step`]
+    /// runs rapier's step and the organ's substeps.
     pub fn step(&mut self) {
         self.steps += 1;
         let t = self.time();
         for k in 0..self.tools.len() {
-            let (at, _, _) = self.place(k, t);
+            let at = self.targets[k].unwrap_or_else(|| self.place(k, t).0);
             let body = self.tools[k].body;
             self.world.bodies[body].set_next_kinematic_translation(at);
         }
         self.set.step(&mut self.world);
     }
 
-    /// Rigid steps taken so far.
-    pub fn steps(&self) -> usize {
-        self.steps
-    }
-
-    /// Rigid steps of the whole run ([`Self::END_TIME`] / [`Self::DT`]).
-    pub fn total_steps() -> usize {
-        (Self::END_TIME / Self::DT).round() as usize
-    }
-
-    /// Time at the end of the last step (s).
-    pub fn time(&self) -> Real {
-        self.steps as Real * Self::DT
+    /// Drives tool `k`'s centre to `target` at the end of every following step instead of
+    /// along its script; `None` gives the tool back to its script. For a viewer whose mouse
+    /// drags the tools, or that repeats their script.
+    pub fn set_tool_target(&mut self, k: usize, target: Option<Vector>) {
+        self.targets[k] = target;
     }
 
     /// When the last tool has lifted off (s).

@@ -1,7 +1,8 @@
 //! The paper's Fig. 7 organ under six forces: the scene of the `constrained_790` example.
 
+use super::paper_organ;
 use crate::math::{Real, Vector};
-use crate::surface::meshing::{paper_organ_outline, triangulate_planar, PlanarMesh};
+use crate::surface::meshing::PlanarMesh;
 use crate::surface::{
     ForceProfile, Integrator, MassDistribution, MassSpringSurface, MassSpringSurfaceBuilder,
 };
@@ -43,6 +44,8 @@ pub fn diverged(s: &MassSpringSurface) -> bool {
 /// }
 /// assert!(s.max_displacement() > 0.0);
 /// ```
+///
+/// [`paper_organ_outline`]: crate::surface::meshing::paper_organ_outline
 #[derive(Clone, Debug)]
 pub struct Fig7Organ {
     /// The planar mesh (788 nodes).
@@ -73,8 +76,7 @@ impl Fig7Organ {
     /// Meshes the organ and finds the force groups. Panics if the mesh does not have exactly
     /// one internal constraint polyline or the groups overlap (neither happens with spade 2.15).
     pub fn new() -> Self {
-        let (outline, target_edge) = paper_organ_outline();
-        let planar = triangulate_planar(&outline, target_edge).expect("the organ meshes");
+        let planar = paper_organ();
         assert_eq!(planar.constrained.len(), 1, "one internal constraint");
         let polyline = planar.constrained[0].clone();
         let pinned: BTreeSet<u32> = polyline.iter().copied().collect();

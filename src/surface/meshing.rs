@@ -674,6 +674,30 @@ pub fn plate(size_x: Real, size_z: Real, nx: u32, nz: u32) -> SurfaceMesh {
     }
 }
 
+/// The vertices on the outer rim of a [`plate`] of `nx × nz` cells (clamped as [`plate`] clamps
+/// them), in increasing order: the ones to pin for a plate clamped on its edges.
+///
+/// ```
+/// use rapier_touch::surface::meshing::{plate, plate_rim};
+/// let rim = plate_rim(4, 2);
+/// assert_eq!(rim, [0, 1, 2, 3, 4, 5, 9, 10, 11, 12, 13, 14]);
+/// let p = plate(2.0, 1.0, 4, 2);
+/// assert!(rim.iter().all(|&i| {
+///     let v = p.vertices[i as usize];
+///     v.x.abs() == 1.0 || v.z.abs() == 0.5
+/// }));
+/// ```
+pub fn plate_rim(nx: u32, nz: u32) -> Vec<u32> {
+    let (nx, nz) = (nx.clamp(1, MAX_GRID_CELLS), nz.clamp(1, MAX_GRID_CELLS));
+    (0..=nz)
+        .flat_map(|j| {
+            (0..=nx)
+                .filter(move |&i| i == 0 || i == nx || j == 0 || j == nz)
+                .map(move |i| i + j * (nx + 1))
+        })
+        .collect()
+}
+
 /// Box faces are clamped to `n ≤ 1024` (12.6 million triangles).
 const MAX_BOX_CELLS: u32 = 1024;
 /// Spheres are clamped to 10 subdivisions (21 million triangles).
@@ -1182,6 +1206,22 @@ mod tests {
         assert_eq!(edges(&p).len(), 30);
         let degenerate = plate(1.0, 1.0, 0, 0);
         assert_eq!(degenerate.num_triangles(), 2);
+    }
+
+    #[test]
+    fn plate_rim_is_the_outer_boundary() {
+        for (size, n) in [(0.3, 15), (0.3, 27), (0.3, 99), (0.3, 54), (2.0, 1)] {
+            let p = plate(size, size, n, n);
+            let edge = 0.5 * size - 1e-4;
+            let by_position: Vec<u32> = (0..p.num_vertices() as u32)
+                .filter(|&i| {
+                    let v = p.vertices[i as usize];
+                    v.x.abs() > edge || v.z.abs() > edge
+                })
+                .collect();
+            assert_eq!(plate_rim(n, n), by_position, "{n} cells");
+        }
+        assert_eq!(plate_rim(0, 0), [0, 1, 2, 3]);
     }
 
     #[test]

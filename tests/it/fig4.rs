@@ -11,7 +11,7 @@ fn run(name: &str) -> (ContactConfiguration, rapier_touch::scenes::ContactScene)
         .unwrap();
     assert_eq!(c.state, TouchState::Penetrating, "{name}");
     assert!(
-        (c.reversing_vector - s.expected_reversing).length() < 1e-5,
+        (c.reversing_vector - s.known.reversing).length() < 1e-5,
         "{name}: {:?}",
         c.reversing_vector
     );
