@@ -3,7 +3,7 @@
 //! to zero; a released surface returns home; a dynamic ball comes to rest on a soft plate; a
 //! surface on a moving kinematic body follows it.
 
-use nalgebra::{DMatrix, DVector};
+use crate::common::{dirichlet_solve, edge_laplacian};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
 
@@ -93,20 +93,7 @@ fn add_ball_tool(
 fn static_force(held: &[(u32, f64)]) -> Vec<f64> {
     let (v, t) = plate_mesh();
     let n = v.len();
-    let mut lap = DMatrix::<f64>::zeros(n, n);
-    let mut edges = std::collections::BTreeSet::new();
-    for tri in &t {
-        for k in 0..3 {
-            let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
-            edges.insert((a as usize, b as usize));
-        }
-    }
-    for &(a, b) in &edges {
-        lap[(a, a)] += K as f64;
-        lap[(b, b)] += K as f64;
-        lap[(a, b)] -= K as f64;
-        lap[(b, a)] -= K as f64;
-    }
+    let lap = edge_laplacian(&t, n, K as f64);
     let pins = boundary();
     let mut u = vec![0.0; n];
     for &(c, d) in held {
@@ -115,18 +102,7 @@ fn static_force(held: &[(u32, f64)]) -> Vec<f64> {
     let known: Vec<bool> = (0..n as u32)
         .map(|i| pins.contains(&i) || held.iter().any(|h| h.0 == i))
         .collect();
-    let free: Vec<usize> = (0..n).filter(|&i| !known[i]).collect();
-    let a = DMatrix::from_fn(free.len(), free.len(), |r, c| lap[(free[r], free[c])]);
-    let rhs = DVector::from_fn(free.len(), |r, _| {
-        -(0..n)
-            .filter(|&j| known[j])
-            .map(|j| lap[(free[r], j)] * u[j])
-            .sum::<f64>()
-    });
-    let x = a.lu().solve(&rhs).unwrap();
-    for (r, &i) in free.iter().enumerate() {
-        u[i] = x[r];
-    }
+    dirichlet_solve(&lap, &known, &mut u);
     // Internal force at each held vertex: -(L u)_c; the tool receives it.
     held.iter()
         .map(|&(c, _)| -(0..n).map(|j| lap[(c as usize, j)] * u[j]).sum::<f64>())
