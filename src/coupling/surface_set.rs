@@ -124,11 +124,10 @@ struct ToolState {
 /// tangential part of its forces. A held vertex stays in contact when the tool slows down or
 /// turns back (it is snapped back onto the tool) until its springs pull it away from the tool.
 /// The filter then spreads that deformation over the next substep. The reaction on a tool is
-/// the sum of the normal parts of the spring and damper forces of the vertices it holds. Dynamic tools
-/// carry the substep-averaged reaction as a rapier force through the next rigid step (one step
-/// of lag),
-/// and surface colliders are updated once per rigid step (`TriMesh::set_vertices`, a BVH
-/// refit).
+/// the sum of the normal parts of the spring and damper forces of the vertices it holds.
+/// Dynamic tools carry the substep-averaged reaction as a rapier force through the next rigid
+/// step (one step of lag), and surface colliders are updated once per rigid step
+/// (`TriMesh::set_vertices`, a BVH refit).
 ///
 /// # Limitations
 /// - Loading happens at vertices: a sharp tool tip pressing inside a large triangle with no
@@ -561,18 +560,17 @@ fn hold_vertices(
         let iu = i as u32;
         let entering = !was_held.get(i).copied().unwrap_or(false);
         let chase = follow && !entering;
-        let slack = if !chase {
-            0.0
+        let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
+        let slack = if chase {
+            own.length() + 2.0 * motion.length() + margin
         } else {
-            let own = prev_positions.get(i).map_or(0.0, |q| (*p - *q).length());
-            own + 2.0 * motion.length() + margin
+            0.0
         };
         let near = p.cmpge(aabb.mins - Vector::splat(slack)).all()
             && p.cmple(aabb.maxs + Vector::splat(slack)).all();
         if !near || surface.is_pinned(iu) || surface.is_held(iu) {
             continue;
         }
-        let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
         let rel = motion - own;
         // In contact: inside the tool, or on its boundary (where the last substep left a held
         // vertex) within a hair, or held before and left behind by the relative motion.
@@ -635,11 +633,11 @@ fn hold_vertices(
 
 /// The outward normal of a convex `shape` at `local`, a point on its boundary (shape frame).
 ///
-/// A short ray cast from just outside the point, back toward the shape's centre, hits the
-/// boundary next to the point and returns the exact normal there for every convex shape
-/// (parry's feature normals at a boundary point are unreliable for polyhedra, cylinders and
-/// cones, and missing for capsules and round shapes). Fallbacks: the feature normal, then the
-/// direction from the shape's centre.
+/// A convex polyhedron gives the normal of its nearest face plane. Any other shape: a short ray
+/// cast from just outside the point, back toward the shape's centre, hits the boundary next to
+/// the point and returns the exact normal there (parry's feature normals at a boundary point
+/// are unreliable for cylinders and cones, and missing for capsules and round shapes).
+/// Fallbacks: the feature normal, then the direction from the shape's centre.
 fn outward_normal(shape: &dyn parry3d::shape::Shape, local: Vector, margin: Real) -> Vector {
     if let Some((n, _)) = shape
         .as_convex_polyhedron()
@@ -671,14 +669,20 @@ fn outward_normal(shape: &dyn parry3d::shape::Shape, local: Vector, margin: Real
 /// and the signed distance of `local` to its plane. For a point inside the polyhedron that
 /// face holds the nearest boundary point.
 fn closest_face(poly: &parry3d::shape::ConvexPolyhedron, local: Vector) -> Option<(Vector, Real)> {
-    let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
-    poly.faces()
-        .iter()
-        .filter_map(|f| {
-            let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
-            Some((f.normal, f.normal.dot(local - *v)))
-        })
+    face_planes(poly)
+        .map(|(n, v)| (n, n.dot(local - v)))
         .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// Each face of `poly` as its outward normal and one of its vertices (shape frame).
+fn face_planes(
+    poly: &parry3d::shape::ConvexPolyhedron,
+) -> impl Iterator<Item = (Vector, Vector)> + '_ {
+    let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
+    poly.faces().iter().filter_map(move |f| {
+        let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
+        Some((f.normal, *v))
+    })
 }
 
 /// The nearest point of the tool's boundary to `p` (world). parry's projection of a point
@@ -706,14 +710,10 @@ fn exit_along(
 ) -> Option<Vector> {
     if let Some(poly) = shape.as_convex_polyhedron() {
         let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
-        let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
-        let t = poly
-            .faces()
-            .iter()
-            .filter_map(|f| {
-                let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
-                let along = f.normal.dot(dl);
-                (along > 0.0).then(|| (-f.normal.dot(local - *v) / along).max(0.0))
+        let t = face_planes(poly)
+            .filter_map(|(n, v)| {
+                let along = n.dot(dl);
+                (along > 0.0).then(|| (-n.dot(local - v) / along).max(0.0))
             })
             .min_by(|a, b| a.total_cmp(b))?;
         return Some(p + d * t);

@@ -846,8 +846,9 @@ impl MassSpringSurface {
     /// steps, until [`MassSpringSurface::release_all`]: a moving pin. It keeps the velocity
     /// given by [`MassSpringSurface::set_state`], and the rest of the surface responds to it as
     /// to a pin: the filtered integrators solve for the holders' impulses through the columns
-    /// of the filter (`S⁻¹ = W M⁻¹`) at the held vertices (a small dense system per step, one extra solve per newly
-    /// held vertex for the exact filter, cached), Baraff-Witkin projects its CG. A held vertex's
+    /// of the filter (`S⁻¹ = W M⁻¹`) at the held vertices (a small dense system per step, one
+    /// extra solve per newly held vertex for the exact filter, cached), Baraff-Witkin projects
+    /// its CG. A held vertex's
     /// [`MassSpringSurface::internal_force`] is what it pushes the holder with.
     ///
     /// # Errors
@@ -1374,10 +1375,10 @@ fn constrain_held(
             cons.push((k, n));
         }
     }
-    // W restricted to the held vertices (h × h), one column visit each.
-    let mut w_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
+    // P restricted to the held vertices (h × h), one column read each.
+    let mut p_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
     for (b, &fj) in list.iter().enumerate() {
-        filter.gather(fj, &list, w_hh.column_mut(b).as_mut_slice());
+        filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
     }
     let m = cons.len();
     let mut a_mat = nalgebra::DMatrix::<f64>::zeros(m, m);
@@ -1385,7 +1386,7 @@ fn constrain_held(
     for (a, (ka, da)) in cons.iter().enumerate() {
         rhs[a] = -da.dot(dv[list[*ka] as usize]);
         for (b, (kb, db)) in cons.iter().enumerate() {
-            a_mat[(a, b)] = da.dot(*db) * w_hh[(*ka, *kb)];
+            a_mat[(a, b)] = da.dot(*db) * p_hh[(*ka, *kb)];
         }
     }
     let lambda = match a_mat.clone().cholesky() {
