@@ -421,3 +421,37 @@ fn capsule_and_cylinder_tools_get_steady_normal_forces() {
     // The flat cylinder (radius 0.15) holds the centre vertex and most of its ring.
     assert!(forces[2].held_vertices >= 5, "{}", forces[2].held_vertices);
 }
+
+#[test]
+fn bad_tool_input_is_refused_or_harmless() {
+    let (mut world, mut set, h) = world_with_plate(4);
+    let c = Vector::new(0.5, 0.0, 0.5);
+    let (_, tool) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.01, 0.02);
+    // A NaN device pose or an unknown tool: no step, no reaction.
+    let nan = Pose::from_translation(Vector::splat(f32::NAN));
+    assert!(set.haptic_step(&world, tool, nan).is_none());
+    let other = world.insert_collider(ColliderBuilder::ball(0.1), None);
+    assert!(set.haptic_step(&world, other, Pose::IDENTITY).is_none());
+    // A degenerate (zero-radius) tool pressed through the plate: finite forces, finite surface.
+    let (b0, t0) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, 0.0);
+    press(
+        &mut world,
+        &mut set,
+        &[(b0, c + Vector::Y * 0.1, c - Vector::Y * 0.05)],
+        20,
+        20,
+    );
+    let r = set.tool_reaction(t0).unwrap();
+    assert!(r.force.is_finite() && r.torque.is_finite());
+    assert!(set.get(h).unwrap().surface.is_finite());
+    // A sliding hold with a zero or NaN normal is a full hold; a bad vertex is an error.
+    let s = &mut set.get_mut(h).unwrap().surface;
+    s.release_all();
+    let free = vid(3, 3);
+    let p = s.position(free);
+    s.set_state(free, p, Vector::X).unwrap();
+    s.hold_sliding(free, Vector::splat(f32::NAN)).unwrap();
+    s.step();
+    assert!((s.position(free) - (p + Vector::X * s.dt())).length() < 1e-6);
+    assert!(s.hold_sliding(10_000, Vector::Y).is_err());
+}
