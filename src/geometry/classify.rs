@@ -117,14 +117,14 @@ pub(crate) fn build_patches(
     let mut parent: Vec<usize> = (0..n).collect();
     for i in 0..n {
         for j in i + 1..n {
-            if features_adjacent(fixed, kept[i].fixed, kept[j].fixed)
+            // Already in one region: the (costly) tests below cannot change anything.
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            if a != b
+                && features_adjacent(fixed, kept[i].fixed, kept[j].fixed)
                 && features_adjacent(moving, kept[i].moving, kept[j].moving)
                 && midpoint_on_both(fixed, moving, fr, s_star, kept[i].point, kept[j].point)
             {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                if a != b {
-                    parent[a] = b;
-                }
+                parent[a] = b;
             }
         }
     }

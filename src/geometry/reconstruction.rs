@@ -44,8 +44,12 @@ use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{BvhNode, TraversalAction};
+use parry3d::query::gjk::{self, VoronoiSimplex};
 use parry3d::query::{PointQuery, Ray, RayCast};
+use parry3d::shape::SupportMap;
 use std::cell::Cell;
+use std::collections::HashSet;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// Why a reconstruction could not run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -76,6 +80,13 @@ pub struct ReconstructionOptions {
     /// How many intermediate poses are tested, at most, to tell a perforation (the object went
     /// through during the step) from a mere graze. Default 32.
     pub max_perforation_samples: usize,
+    /// Use the convex path when both meshes are convex ([`TouchMesh::is_convex`]): parry's GJK
+    /// ray cast on the Minkowski difference gives the first touch, and only the triangles
+    /// around its witness points, then the touching region grown through mesh adjacency, are
+    /// tested exactly. Default `true`. The general branch-and-bound search runs instead when
+    /// this is `false`, when GJK does not converge, when the exact test disagrees with it, and
+    /// for perforations (the convex path only decides separated, touching and penetrating).
+    pub convex_fast_path: bool,
 }
 
 impl Default for ReconstructionOptions {
@@ -84,6 +95,7 @@ impl Default for ReconstructionOptions {
             tolerance: 1.0e-6,
             zero_motion_direction: None,
             max_perforation_samples: 32,
+            convex_fast_path: true,
         }
     }
 }
@@ -128,6 +140,31 @@ struct Workspace {
     tm_range: Vec<(u32, u32)>,
     tm_range_stamp: Vec<u32>,
     counter: u32,
+    /// Convex path: triangles near the witness points, visited triangle pairs, touching pairs
+    /// still to grow from, and the last support vertices (warm starts).
+    near_f: Vec<u32>,
+    near_m: Vec<u32>,
+    visited: HashSet<u64, BuildHasherDefault<PairHasher>>,
+    grow: Vec<(u32, u32)>,
+    warm: [u32; 2],
+}
+
+/// Hashes a packed triangle pair with one multiplication (the keys are already well spread).
+#[derive(Default)]
+struct PairHasher(u64);
+
+impl Hasher for PairHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ b as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (x ^ (x >> 29)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
 }
 
 impl Workspace {
@@ -273,8 +310,6 @@ impl Reconstructor {
             tol,
             stamp,
         };
-        let to_world = |p: DVec3| -> Vector { (rf * p + tf).as_vec3() };
-
         let mut result = ContactConfiguration {
             state: TouchState::Separated,
             reversing_vector: Vector::ZERO,
@@ -288,11 +323,30 @@ impl Reconstructor {
         };
 
         // The range of `s` over which the bounding boxes overlap.
-        let Some((_, s_hi)) = aabb_overlap_range(fixed, moving, &fr) else {
+        let Some((s_lo_box, s_hi)) = aabb_overlap_range(fixed, moving, &fr) else {
             return Ok(result);
         };
         if s_hi < -tol {
             return Ok(result);
+        }
+        if self.options.convex_fast_path && fixed.is_convex() && moving.is_convex() {
+            match self.convex_touch(fixed, moving, &fr, s_lo_box, s_hi) {
+                Some(ConvexTouch::Apart) => return Ok(result),
+                Some(ConvexTouch::Penetrating(s)) => {
+                    result.state = TouchState::Penetrating;
+                    // The start pose penetrates too when the touch lies beyond it.
+                    result.on_trajectory =
+                        source == DirectionSource::Trajectory && s <= traj_len + tol;
+                    result.candidate_pairs = self.ws.visited.len();
+                    return Ok(self.finish(result, fixed, moving, &fr, s, traj_len, rf, tf));
+                }
+                Some(ConvexTouch::Touching) => {
+                    result.state = TouchState::Touching;
+                    result.candidate_pairs = self.ws.visited.len();
+                    return Ok(self.finish(result, fixed, moving, &fr, 0.0, traj_len, rf, tf));
+                }
+                None => {}
+            }
         }
         // A touch up to one tolerance before the start of the step still counts as on the step
         // (a start pose that overlaps by a rounding error).
@@ -353,6 +407,25 @@ impl Reconstructor {
             return Ok(result);
         }
 
+        Ok(self.finish(result, fixed, moving, &fr, s_star, traj_len, rf, tf))
+    }
+
+    /// Fills in the reversing vector, time of impact and contact patches for a touch at
+    /// `s_star`, from the events in the workspace.
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &self,
+        mut result: ContactConfiguration,
+        fixed: &TouchMesh,
+        moving: &TouchMesh,
+        fr: &Frame,
+        s_star: f64,
+        traj_len: f64,
+        rf: DQuat,
+        tf: DVec3,
+    ) -> ContactConfiguration {
+        let to_world = |p: DVec3| -> Vector { (rf * p + tf).as_vec3() };
+        let u_world = rf * fr.u;
         let s_star = s_star.max(0.0);
         if s_star > 0.0 {
             result.reversing_vector = (-s_star * u_world).as_vec3();
@@ -368,11 +441,173 @@ impl Reconstructor {
             .ws
             .events
             .iter()
-            .filter(|e| (e.s - s_star).abs() <= tol)
+            .filter(|e| (e.s - s_star).abs() <= fr.tol)
             .cloned()
             .collect();
-        result.patches = build_patches(fixed, moving, &fr, selected, s_star, &to_world, rf);
-        Ok(result)
+        result.patches = build_patches(fixed, moving, fr, selected, s_star, &to_world, rf);
+        result
+    }
+
+    /// The convex path (see [`ReconstructionOptions::convex_fast_path`]). For two convex
+    /// objects the poses at which they overlap form one interval `[s_lo, s_hi]` of the line
+    /// (the line crosses the convex Minkowski difference once), so two GJK ray casts, one from
+    /// each end of the bounding-box range, decide the state, and `s_hi` is the first touch.
+    /// `None` hands the query to the general search.
+    fn convex_touch(
+        &mut self,
+        fixed: &TouchMesh,
+        moving: &TouchMesh,
+        fr: &Frame,
+        s_lo_box: f64,
+        s_hi_box: f64,
+    ) -> Option<ConvexTouch> {
+        let tol = fr.tol;
+        let scale = fixed.scale().max(moving.scale()) as f64;
+        // GJK runs in f32 and stops 1.2e-6 (absolute) from the Minkowski difference.
+        let window = (1.0e-4 * scale).max(1.0e-5).max(100.0 * tol);
+        let pad = 1.0e-3 * scale + window;
+        let s_from = s_hi_box + pad;
+        let (t, w1, w2) = self.convex_cast(fixed, moving, fr, s_from, fr.u)?;
+        let s_hi = s_from - t;
+        if s_hi < -tol - window {
+            return Some(ConvexTouch::Apart);
+        }
+        let deep = if s_hi > tol + window {
+            let s_to = s_lo_box - pad;
+            let (t_lo, ..) = self.convex_cast(fixed, moving, fr, s_to, -fr.u)?;
+            let s_lo = s_to + t_lo;
+            if s_lo > s_hi + window {
+                return None;
+            }
+            if s_lo >= -tol - window {
+                // Apart or touching at the front end now: passed through, or about to.
+                return None;
+            }
+            true
+        } else {
+            false
+        };
+        let b = self.convex_events(fixed, moving, fr, w1, w2, s_hi, window)?;
+        if (b - s_hi).abs() > window {
+            return None;
+        }
+        if deep {
+            (b > tol).then_some(ConvexTouch::Penetrating(b))
+        } else if b < -tol {
+            Some(ConvexTouch::Apart)
+        } else if b <= tol {
+            Some(ConvexTouch::Touching)
+        } else {
+            None
+        }
+    }
+
+    /// GJK ray cast of the moving mesh, walked back to `s_from`, travelling along unit `dir`
+    /// (fixed frame): the distance to contact, the witness on the fixed mesh (fixed frame) and
+    /// on the moving mesh (its own frame). `None` if GJK misses or does not converge.
+    fn convex_cast(
+        &mut self,
+        fixed: &TouchMesh,
+        moving: &TouchMesh,
+        fr: &Frame,
+        s_from: f64,
+        dir: DVec3,
+    ) -> Option<(f64, Vector, Vector)> {
+        let pos12 = Pose::from_parts((fr.tra - s_from * fr.u).as_vec3(), fr.rot.as_quat());
+        let g1 = HillClimb {
+            mesh: fixed,
+            warm: Cell::new(self.ws.warm[0]),
+        };
+        let g2 = HillClimb {
+            mesh: moving,
+            warm: Cell::new(self.ws.warm[1]),
+        };
+        let hit =
+            gjk::directional_distance(&pos12, &g1, &g2, dir.as_vec3(), &mut VoronoiSimplex::new());
+        self.ws.warm = [g1.warm.get(), g2.warm.get()];
+        let (t, _, w1, w2) = hit?;
+        // A zero distance means the cast started in contact: no witnesses.
+        (t.is_finite() && t > 0.0 && w1.is_finite() && w2.is_finite())
+            .then(|| (t as f64, w1, pos12.inverse_transform_point(w2)))
+    }
+
+    /// Exact events of the convex path: every touch within `window` of the GJK estimate `s_g`
+    /// among the triangles near the witness points `w1` (fixed mesh, fixed frame) and `w2`
+    /// (moving mesh, its frame), then the whole touching region, grown pair by pair through
+    /// triangles sharing a vertex. Leaves the events at the largest touch in the workspace and
+    /// returns it; `None` if no touch was found near the witnesses.
+    #[allow(clippy::too_many_arguments)]
+    fn convex_events(
+        &mut self,
+        fixed: &TouchMesh,
+        moving: &TouchMesh,
+        fr: &Frame,
+        w1: Vector,
+        w2: Vector,
+        s_g: f64,
+        window: f64,
+    ) -> Option<f64> {
+        let ws = &mut self.ws;
+        ws.events.clear();
+        ws.pairs.clear();
+        ws.visited.clear();
+        ws.grow.clear();
+        let tol = fr.tol;
+        let r = Vector::splat((10.0 * window) as Real);
+        let (mut near_f, mut near_m) = (
+            std::mem::take(&mut ws.near_f),
+            std::mem::take(&mut ws.near_m),
+        );
+        near_f.clear();
+        near_f.extend(fixed.bvh().intersect_aabb(&Aabb::new(w1 - r, w1 + r)));
+        near_m.clear();
+        near_m.extend(moving.bvh().intersect_aabb(&Aabb::new(w2 - r, w2 + r)));
+        let (lo, hi) = (s_g - window, s_g + window);
+        let mut found: Vec<(u32, u32, f64)> = Vec::with_capacity(near_f.len() * near_m.len());
+        for &tf in &near_f {
+            for &tm in &near_m {
+                ws.visited.insert(pair_key(tf, tm));
+                if !boxes_meet(ws, fixed, moving, fr, tf, tm, lo, hi) {
+                    continue;
+                }
+                let s = pair_events(ws, fixed, moving, fr, tf, tm, lo, hi);
+                if s.is_finite() {
+                    found.push((tf, tm, s));
+                }
+            }
+        }
+        ws.near_f = near_f;
+        ws.near_m = near_m;
+        let mut b = found.iter().map(|f| f.2).fold(f64::NEG_INFINITY, f64::max);
+        if !b.is_finite() {
+            return None;
+        }
+        ws.grow
+            .extend(found.iter().filter(|f| f.2 >= b - tol).map(|f| (f.0, f.1)));
+        while let Some((tf, tm)) = ws.grow.pop() {
+            for k in 0..6 {
+                let (mesh, v) = if k < 3 {
+                    (fixed, fixed.indices()[tf as usize][k])
+                } else {
+                    (moving, moving.indices()[tm as usize][k - 3])
+                };
+                for &t in mesh.vertex_triangles(v) {
+                    let (a, c) = if k < 3 { (t, tm) } else { (tf, t) };
+                    if !ws.visited.insert(pair_key(a, c))
+                        || !boxes_meet(ws, fixed, moving, fr, a, c, b - tol, b + tol)
+                    {
+                        continue;
+                    }
+                    let s = pair_events(ws, fixed, moving, fr, a, c, b - tol, b + tol);
+                    if s >= b - tol {
+                        b = b.max(s);
+                        ws.grow.push((a, c));
+                    }
+                }
+            }
+        }
+        ws.events.retain(|e| e.s >= b - tol);
+        Some(b)
     }
 
     /// The largest touch `s` in `[s_min, s_max]` (`-inf` if none), with every event within the
@@ -699,6 +934,59 @@ fn support_vertex(mesh: &TouchMesh, dir: Vector) -> u32 {
     }
 }
 
+/// What the convex path decided.
+enum ConvexTouch {
+    /// No touch at or behind the current pose.
+    Apart,
+    /// Penetrating now; the first touch is this far back (events in the workspace).
+    Penetrating(f64),
+    /// Touching now (events in the workspace).
+    Touching,
+}
+
+/// A convex mesh as a parry support map: support points by hill climbing
+/// ([`TouchMesh::convex_support`]) from the previous answer.
+struct HillClimb<'a> {
+    mesh: &'a TouchMesh,
+    warm: Cell<u32>,
+}
+
+impl SupportMap for HillClimb<'_> {
+    fn local_support_point(&self, dir: Vector) -> Vector {
+        let v = self.mesh.convex_support(dir, self.warm.get()).unwrap_or(0);
+        self.warm.set(v);
+        self.mesh.vertices()[v as usize]
+    }
+}
+
+fn pair_key(tf: u32, tm: u32) -> u64 {
+    ((tf as u64) << 32) | tm as u64
+}
+
+/// Can triangles `tf` and `tm` (the latter walked back by some `s` in `[s0, s1]`) be within
+/// the tolerance of each other? The fixed triangle's bounding box and the moving one's swept
+/// over the range, loosened by two tolerances, overlap.
+#[allow(clippy::too_many_arguments)]
+fn boxes_meet(
+    ws: &mut Workspace,
+    fixed: &TouchMesh,
+    moving: &TouchMesh,
+    fr: &Frame,
+    tf: u32,
+    tm: u32,
+    s0: f64,
+    s1: f64,
+) -> bool {
+    let a = fixed_tri(fixed, tf);
+    let b = moving.indices()[tm as usize].map(|v| moving_pt(ws, moving, fr, v));
+    let m = DVec3::splat(2.0 * fr.tol);
+    let (a_lo, a_hi) = (a[0].min(a[1]).min(a[2]), a[0].max(a[1]).max(a[2]));
+    let (b_lo, b_hi) = (b[0].min(b[1]).min(b[2]), b[0].max(b[1]).max(b[2]));
+    let (d0, d1) = (-s0 * fr.u, -s1 * fr.u);
+    let (b_lo, b_hi) = (b_lo + d0.min(d1), b_hi + d0.max(d1));
+    (a_lo - m).cmple(b_hi).all() && (b_lo - m).cmple(a_hi).all()
+}
+
 /// A touch `s` in `[s_min, s_max]` found cheaply (or `None`): the moving object's deepest
 /// vertex against the fixed mesh, and the fixed object's deepest vertex against the moving
 /// mesh, each by one parry ray cast from the far end of the range.
@@ -960,12 +1248,17 @@ fn edge_edge(
     let f = q1 - q0;
     let n = e.cross(f);
     let det = n.dot(u);
-    let nl = n.length();
-    if det.abs() <= 1e-10 * e.length() * f.length() || nl == 0.0 {
+    // Parallel to the motion (or to each other): no single crossing. Also rejects n = 0.
+    if det * det <= 1e-20 * e.length_squared() * f.length_squared() {
         return None;
     }
     let w = q0 - p0;
     let inv = 1.0 / det;
+    // The range of s is the most selective test: first. (e · (f × w) = w · n.)
+    let s = -w.dot(n) * inv;
+    if !(s >= s_min && s <= s_max) {
+        return None;
+    }
     let alpha = w.dot(f.cross(u)) * inv;
     if !(-BARY_EPS..=1.0 + BARY_EPS).contains(&alpha) {
         return None;
@@ -974,8 +1267,12 @@ fn edge_edge(
     if !(-BARY_EPS..=1.0 + BARY_EPS).contains(&beta) {
         return None;
     }
-    let s = -e.dot(f.cross(w)) * inv;
-    (s >= s_min && s <= s_max).then_some((s, alpha.clamp(0.0, 1.0), beta.clamp(0.0, 1.0), n / nl))
+    Some((
+        s,
+        alpha.clamp(0.0, 1.0),
+        beta.clamp(0.0, 1.0),
+        n.normalize(),
+    ))
 }
 
 /// Snaps a point given by barycentric coordinates on internal triangle `t` to the feature it

@@ -7,7 +7,7 @@
 use crate::common::{shifted, surface_distance, surfaces_intersect};
 use parry3d::query::{self, ShapeCastOptions};
 use proptest::prelude::*;
-use rapier_touch::geometry::generators::icosphere;
+use rapier_touch::geometry::generators::{icosphere, subdivided_box};
 use rapier_touch::prelude::*;
 
 fn vec3() -> impl Strategy<Value = Vector> {
@@ -34,6 +34,22 @@ fn convex() -> impl Strategy<Value = (ConvexPolyhedron, TouchMesh)> {
         let (v, i) = parry3d::transformation::convex_hull(&pts);
         (e.min_element() > 0.3).then(|| (c, TouchMesh::new(v, i).unwrap()))
     })
+}
+
+/// A convex mesh of one of three kinds: the hull of random points, a box whose faces are split
+/// into coplanar triangles (flat plateaus for hill climbing), or an icosphere.
+fn convex_mesh() -> impl Strategy<Value = TouchMesh> {
+    prop_oneof![
+        convex().prop_map(|(_, m)| m),
+        (vec3(), 1u32..4).prop_map(|(h, n)| {
+            let (v, i) = subdivided_box(h.abs() * 0.5 + Vector::splat(0.1), n);
+            TouchMesh::new(v, i).unwrap()
+        }),
+        (0.2f32..0.8, 1u32..3).prop_map(|(r, n)| {
+            let (v, i) = icosphere(r, n);
+            TouchMesh::new(v, i).unwrap()
+        }),
+    ]
 }
 
 /// A star-shaped closed mesh: an icosphere whose vertices are pushed in or out.
@@ -242,5 +258,33 @@ proptest! {
         prop_assert_eq!(c.direction_source, DirectionSource::ZeroMotionFallback);
         prop_assert_eq!(c.state, TouchState::Penetrating);
         check_touching(&fixed, &Pose::IDENTITY, &moving, &now, &c, c.direction)?;
+    }
+
+    /// The convex path (GJK first touch, local exact events) and the general branch-and-bound
+    /// search give the same state, depth and contact kinds for random convex pairs in random
+    /// poses: separated, touching, penetrating, perforated, with and without motion.
+    #[test]
+    fn convex_path_agrees_with_the_general_search(
+        fixed in convex_mesh(), moving in convex_mesh(), rf in rotation(), rm in rotation(),
+        offset in vec3(), d in vec3(), still in prop::bool::weighted(0.1),
+    ) {
+        prop_assert!(fixed.is_convex() && moving.is_convex());
+        let pose_f = Pose::from_parts(Vector::new(0.1, -0.2, 0.05), rf);
+        let now = Pose::from_parts(pose_f.translation + offset * 0.8, rm);
+        let prev = if still { now } else { shifted(&now, -d) };
+        let general = ReconstructionOptions { convex_fast_path: false, ..Default::default() };
+        let g = Reconstructor::new(general).reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
+        let f = Reconstructor::default().reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
+        let tol = 1e-6 * fixed.scale().max(moving.scale());
+        prop_assert_eq!(f.state, g.state, "fast {:?} vs general {:?}", f, g);
+        prop_assert!((f.depth - g.depth).abs() <= 10.0 * tol, "depth {} vs {}", f.depth, g.depth);
+        prop_assert!((f.reversing_vector - g.reversing_vector).length() <= 10.0 * tol);
+        prop_assert_eq!(f.on_trajectory, g.on_trajectory);
+        let kinds = |c: &ContactConfiguration| {
+            let mut k: Vec<u8> = c.patches.iter().map(|p| p.kind as u8).collect();
+            k.sort();
+            k
+        };
+        prop_assert_eq!(kinds(&f), kinds(&g), "fast {:?} vs general {:?}", f.patches, g.patches);
     }
 }
