@@ -4,7 +4,9 @@
 //!
 //! Run with `cargo bench --bench reconstruction`. Groups:
 //! - `reconstruction`: [`Reconstructor::reconstruct`] with a warmed-up reconstructor (scratch
-//!   memory already sized);
+//!   memory already sized): `reconstruct` with the default options, and for the convex pairs
+//!   `general_search` with the convex path switched off
+//!   ([`ReconstructionOptions::convex_fast_path`]);
 //! - `parry_manifolds`: `PersistentQueryDispatcher::contact_manifolds` between the two
 //!   TriMeshes with rapier's default prediction distance, `cold` (fresh manifold vector and
 //!   workspace each call: a pair's first frame) and `warm` (both kept between calls, as rapier
@@ -119,6 +121,25 @@ fn bench(c: &mut Criterion) {
                 )
             })
         });
+        // The general branch-and-bound search on the same pair, for the convex pairs that the
+        // default takes through the convex path.
+        if s.fixed.is_convex() && s.moving.is_convex() {
+            let mut rec = Reconstructor::new(ReconstructionOptions {
+                convex_fast_path: false,
+                ..Default::default()
+            });
+            group.bench_with_input(BenchmarkId::new("general_search", label(s)), s, |b, s| {
+                b.iter(|| {
+                    rec.reconstruct(
+                        black_box(&s.fixed),
+                        black_box(&s.fixed_pose),
+                        black_box(&s.moving),
+                        black_box(&s.pose),
+                        black_box(&s.prev_pose),
+                    )
+                })
+            });
+        }
     }
     group.finish();
 

@@ -5,7 +5,7 @@
 use super::contact::{ContactKind, ContactPatch, ContactPoint};
 use super::reconstruction::Frame;
 use super::touch_mesh::{Feature, TouchMesh};
-use crate::math::Vector;
+use crate::math::{Real, Vector};
 use glamx::{DQuat, DVec3};
 use parry3d::query::PointQuery;
 
@@ -56,9 +56,11 @@ fn midpoint_on_both(
     if a.distance_squared(b) <= (4.0 * lim) * (4.0 * lim) {
         return true;
     }
+    // A projection bounded by the limit: parry prunes every BVH node farther than it.
     let on = |mesh: &TouchMesh, p: DVec3| {
-        let q = mesh.trimesh().project_local_point(p.as_vec3(), false).point;
-        q.as_dvec3().distance(p) <= lim
+        mesh.trimesh()
+            .project_local_point_with_max_dist(p.as_vec3(), false, lim as Real)
+            .is_some_and(|q| q.point.as_dvec3().distance(p) <= lim)
     };
     // The moving surface at first touch: walked back by s_star, in its own frame.
     let m_local = fr.rot.conjugate() * (m + s_star * fr.u - fr.tra);

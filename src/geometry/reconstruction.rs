@@ -463,6 +463,17 @@ impl Reconstructor {
     ) -> Option<ConvexTouch> {
         let tol = fr.tol;
         let scale = fixed.scale().max(moving.scale()) as f64;
+        // parry's GJK runs in f32 and asserts finite bounds: keep its coordinates (and their
+        // squares) far from overflow; huge scenes take the general search.
+        let reach = |m: &TouchMesh| {
+            let b = m.local_aabb();
+            b.mins.abs().max(b.maxs.abs()).max_element() as f64
+        };
+        let extent =
+            reach(fixed) + reach(moving) + fr.tra.length() + s_lo_box.abs() + s_hi_box.abs();
+        if !extent.is_finite() || extent >= 1.0e8 {
+            return None;
+        }
         // GJK runs in f32 and stops 1.2e-6 (absolute) from the Minkowski difference.
         let window = (1.0e-4 * scale).max(1.0e-5).max(100.0 * tol);
         let pad = 1.0e-3 * scale + window;
@@ -1381,11 +1392,8 @@ fn deep_inside(mesh: &TouchMesh, p: DVec3, tol: f64) -> bool {
     point_in_closed_mesh(mesh, p) == Some(true)
         && mesh
             .trimesh()
-            .project_local_point(p.as_vec3(), false)
-            .point
-            .as_dvec3()
-            .distance(p)
-            > tol
+            .project_local_point_with_max_dist(p.as_vec3(), false, tol as Real)
+            .is_none_or(|q| q.point.as_dvec3().distance(p) > tol)
 }
 
 /// Parity test for a point in the local frame of a closed mesh. `None` if the ray grazes an

@@ -196,3 +196,46 @@ proptest! {
         }
     }
 }
+
+/// Huge but finite poses never panic (parry's f32 GJK, used for convex pairs, asserts finite
+/// bounds) and give finite results; two cubes overlapping far from the origin are still found
+/// penetrating by the right depth while f32 resolves it.
+#[test]
+fn huge_finite_poses_do_not_panic() {
+    let (a, b) = (cube(0.5), cube(0.5));
+    let mut rec = Reconstructor::default();
+    for far in [1.0e3f32, 1.0e7, 1.0e12, 1.0e20, 1.0e30, f32::MAX / 4.0] {
+        for base in [Vector::new(far, 0.0, 0.0), Vector::new(0.0, 0.0, 0.0)] {
+            let fixed = Pose::from_translation(base);
+            let now = Pose::from_translation(Vector::new(far, 0.9, 0.0));
+            let before = Pose::from_translation(Vector::new(far, 1.4, 0.0));
+            let c = rec.reconstruct(&a, &fixed, &b, &now, &before).unwrap();
+            assert!(
+                c.reversing_vector.is_finite() && c.depth.is_finite(),
+                "{far}: {c:?}"
+            );
+            if far <= 1.0e3 && base.x == far {
+                assert_eq!(c.state, TouchState::Penetrating);
+                assert!((c.depth - 0.1).abs() < 1e-4, "{far}: depth {}", c.depth);
+            }
+        }
+    }
+    // Huge meshes overlapping: coordinates whose squares overflow f32.
+    for h in [1.0e10f32, 1.0e15, 1.0e20, 1.0e30] {
+        // Past about 1e18 the mesh itself is refused (its triangle areas overflow f32).
+        let Ok(a) = TouchMesh::from_shape(&Cuboid::new(Vector::splat(h))) else {
+            assert!(h > 1.0e18, "{h}");
+            continue;
+        };
+        let b = a.clone();
+        let now = Pose::from_translation(Vector::new(0.0, 1.8 * h, 0.0));
+        let before = Pose::from_translation(Vector::new(0.0, 2.8 * h, 0.0));
+        let c = rec
+            .reconstruct(&a, &Pose::IDENTITY, &b, &now, &before)
+            .unwrap();
+        assert!(
+            c.reversing_vector.is_finite() && c.depth.is_finite(),
+            "{h}: {c:?}"
+        );
+    }
+}
