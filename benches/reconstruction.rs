@@ -12,7 +12,8 @@
 //!   workspace each call: a pair's first frame) and `warm` (both kept between calls, as rapier
 //!   keeps them for a persistent pair).
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::measurement::WallTime;
+use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion};
 use parry3d::query::{ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher};
 use rapier_touch::prelude::*;
 use rapier_touch::scenes::{table1_scenes, Table1Scene};
@@ -53,6 +54,30 @@ fn label(s: &Table1Scene) -> String {
         "{}_{}e_{}v",
         s.name, s.known.colliding_edges, s.known.colliding_vertices
     )
+}
+
+/// Benchmarks [`Reconstructor::reconstruct`] on one scene, after a warm-up query that sizes the
+/// scratch memory.
+fn bench_reconstruct(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    id: &str,
+    options: ReconstructionOptions,
+    s: &Table1Scene,
+) {
+    let mut rec = Reconstructor::new(options);
+    rec.reconstruct(&s.fixed, &s.fixed_pose, &s.moving, &s.pose, &s.prev_pose)
+        .expect("finite poses");
+    group.bench_with_input(BenchmarkId::new(id, label(s)), s, |b, s| {
+        b.iter(|| {
+            rec.reconstruct(
+                black_box(&s.fixed),
+                black_box(&s.fixed_pose),
+                black_box(&s.moving),
+                black_box(&s.pose),
+                black_box(&s.prev_pose),
+            )
+        })
+    });
 }
 
 fn bench(c: &mut Criterion) {
@@ -106,39 +131,20 @@ fn bench(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(2));
     for s in &scenes {
-        let mut rec = Reconstructor::default();
-        // Warm up: size the scratch memory for this pair.
-        rec.reconstruct(&s.fixed, &s.fixed_pose, &s.moving, &s.pose, &s.prev_pose)
-            .expect("finite poses");
-        group.bench_with_input(BenchmarkId::new("reconstruct", label(s)), s, |b, s| {
-            b.iter(|| {
-                rec.reconstruct(
-                    black_box(&s.fixed),
-                    black_box(&s.fixed_pose),
-                    black_box(&s.moving),
-                    black_box(&s.pose),
-                    black_box(&s.prev_pose),
-                )
-            })
-        });
+        bench_reconstruct(
+            &mut group,
+            "reconstruct",
+            ReconstructionOptions::default(),
+            s,
+        );
         // The general branch-and-bound search on the same pair, for the convex pairs that the
         // default takes through the convex path.
         if s.fixed.is_convex() && s.moving.is_convex() {
-            let mut rec = Reconstructor::new(ReconstructionOptions {
+            let general = ReconstructionOptions {
                 convex_fast_path: false,
                 ..Default::default()
-            });
-            group.bench_with_input(BenchmarkId::new("general_search", label(s)), s, |b, s| {
-                b.iter(|| {
-                    rec.reconstruct(
-                        black_box(&s.fixed),
-                        black_box(&s.fixed_pose),
-                        black_box(&s.moving),
-                        black_box(&s.pose),
-                        black_box(&s.prev_pose),
-                    )
-                })
-            });
+            };
+            bench_reconstruct(&mut group, "general_search", general, s);
         }
     }
     group.finish();

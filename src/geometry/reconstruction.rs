@@ -140,11 +140,13 @@ struct Workspace {
     tm_range: Vec<(u32, u32)>,
     tm_range_stamp: Vec<u32>,
     counter: u32,
-    /// Convex path: triangles near the witness points, visited triangle pairs, touching pairs
-    /// still to grow from, and the last support vertices (warm starts).
+    /// Convex path: triangles near the witness points, visited triangle pairs, the touches
+    /// found near the witnesses, touching pairs still to grow from, and the last support
+    /// vertices (warm starts).
     near_f: Vec<u32>,
     near_m: Vec<u32>,
     visited: HashSet<u64, BuildHasherDefault<PairHasher>>,
+    near_touches: Vec<(u32, u32, f64)>,
     grow: Vec<(u32, u32)>,
     warm: [u32; 2],
 }
@@ -574,7 +576,8 @@ impl Reconstructor {
         near_m.clear();
         near_m.extend(moving.bvh().intersect_aabb(&Aabb::new(w2 - r, w2 + r)));
         let (lo, hi) = (s_g - window, s_g + window);
-        let mut found: Vec<(u32, u32, f64)> = Vec::with_capacity(near_f.len() * near_m.len());
+        let mut found = std::mem::take(&mut ws.near_touches);
+        found.clear();
         for &tf in &near_f {
             for &tm in &near_m {
                 ws.visited.insert(pair_key(tf, tm));
@@ -595,6 +598,7 @@ impl Reconstructor {
         }
         ws.grow
             .extend(found.iter().filter(|f| f.2 >= b - tol).map(|f| (f.0, f.1)));
+        ws.near_touches = found;
         while let Some((tf, tm)) = ws.grow.pop() {
             for k in 0..6 {
                 let (mesh, v) = if k < 3 {
