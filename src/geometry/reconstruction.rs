@@ -930,23 +930,7 @@ impl Reconstructor {
 /// The vertex of `mesh` farthest along `dir` (mesh frame) reached by hill climbing over the
 /// vertex graph from vertex 0: the support point on a convex mesh, a local maximum otherwise.
 fn support_vertex(mesh: &TouchMesh, dir: Vector) -> u32 {
-    let v = mesh.vertices();
-    let mut best = 0u32;
-    let mut best_d = v[0].dot(dir);
-    loop {
-        let mut improved = false;
-        for &w in mesh.vertex_neighbours(best) {
-            let d = v[w as usize].dot(dir);
-            if d > best_d {
-                best_d = d;
-                best = w;
-                improved = true;
-            }
-        }
-        if !improved {
-            return best;
-        }
-    }
+    mesh.hill_climb(0, dir)
 }
 
 /// What the convex path decided.

@@ -430,6 +430,28 @@ impl TouchMesh {
         self.convex.is_some()
     }
 
+    /// Strict hill climbing over the vertex graph from `start`: moves to a neighbour farther
+    /// along `dir` until none is. A local maximum of `dir · x`, the support vertex on a convex
+    /// mesh (see [`TouchMesh::convex_support`] for the one exception).
+    pub(crate) fn hill_climb(&self, start: u32, dir: Vector) -> u32 {
+        let v = self.vertices();
+        let mut best = start;
+        let mut best_d = v[best as usize].dot(dir);
+        loop {
+            let mut improved = false;
+            for &w in self.vertex_neighbours(best) {
+                let d = v[w as usize].dot(dir);
+                if d > best_d {
+                    (best, best_d) = (w, d);
+                    improved = true;
+                }
+            }
+            if !improved {
+                return best;
+            }
+        }
+    }
+
     /// The vertex farthest along `dir` of a convex mesh: strict hill climbing over the vertex
     /// graph from the best of `warm` (a previous answer) and a 26-direction directory. On a
     /// convex surface every vertex that is not a maximum has a strictly better neighbour,
@@ -439,22 +461,7 @@ impl TouchMesh {
     pub(crate) fn convex_support(&self, dir: Vector, warm: u32) -> Option<u32> {
         let cd = self.convex.as_ref()?;
         let v = self.vertices();
-        let climb = |mut best: u32| {
-            let mut best_d = v[best as usize].dot(dir);
-            loop {
-                let mut improved = false;
-                for &w in self.vertex_neighbours(best) {
-                    let d = v[w as usize].dot(dir);
-                    if d > best_d {
-                        (best, best_d) = (w, d);
-                        improved = true;
-                    }
-                }
-                if !improved {
-                    return best;
-                }
-            }
-        };
+        let climb = |start: u32| self.hill_climb(start, dir);
         // Stuck inside the face opposite `dir`?
         let stuck = |best: u32| cd.flat_normal[best as usize].dot(dir) < 0.0;
         let warm_ok = (warm as usize) < v.len() && !self.vertex_triangles(warm).is_empty();
