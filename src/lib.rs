@@ -37,13 +37,15 @@
 //!   [`hooks::TouchHooks`], a step guard against tunneling, tool proxies and contact reports.
 //!
 //! ## Caveats
-//! - A body that also rotated over the step is walked back along `-D` at its *current*
-//!   orientation. If that pose still penetrates, the reversal continues past the step's start
-//!   to the nearest non-penetrating pose ([`geometry::ContactConfiguration::on_trajectory`]).
+//! - A body that also rotated over the step is walked back along its real path
+//!   ([`geometry::RigidMotion`]: rotation about its centre of mass, as rapier integrates it); the
+//!   result is then a touch pose ([`geometry::ContactConfiguration::touch_pose`]). If the step
+//!   started penetrating, the reversal continues past the step's start to the nearest
+//!   non-penetrating pose ([`geometry::ContactConfiguration::on_trajectory`] is `false`).
 //! - With no translation (`D = 0`) a fallback direction is used
 //!   ([`geometry::ReconstructionOptions::zero_motion_direction`]).
-//! - "One object wholly inside the other" is detected only for closed meshes; open meshes
-//!   (a floor of zero thickness) are shells.
+//! - "One object wholly inside the other" is detected only when the outer one is closed;
+//!   open meshes (a floor of zero thickness) are shells.
 #![warn(missing_docs)]
 
 pub use parry3d;
@@ -66,7 +68,7 @@ pub mod prelude {
     pub use crate::geometry::{
         safe_step_length, ContactConfiguration, ContactKind, ContactPatch, ContactPoint,
         DirectionSource, Feature, ReconstructionError, ReconstructionOptions, Reconstructor,
-        TouchMesh, TouchMeshError, TouchState,
+        RigidMotion, TouchMesh, TouchMeshError, TouchState,
     };
     pub use crate::hooks::{
         HookCounters, PairReport, ToolFeedback, TouchHooks, TouchOptions, TouchPipeline,

@@ -1,7 +1,7 @@
 //! What a reconstruction returns: [`ContactConfiguration`] and its [`ContactPatch`]es.
 
 use super::touch_mesh::Feature;
-use crate::math::{Real, Vector};
+use crate::math::{Pose, Real, Vector};
 
 /// The configuration of the pair at the current pose (the paper's Fig. 1).
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -87,10 +87,13 @@ pub struct ContactConfiguration {
     /// The configuration at the current pose.
     pub state: TouchState,
     /// World-space translation that takes the moving object from its current pose back to first
-    /// touch. Parallel to `-D` (zero when separated or touching).
+    /// touch. Parallel to `-D` (zero when separated or touching). When the object also turned
+    /// over the step, it is the translation part of the way back to
+    /// [`ContactConfiguration::touch_pose`], which also restores the orientation.
     pub reversing_vector: Vector,
     /// `|reversing_vector|`: the penetration depth measured along the trajectory (the paper's
-    /// maximum `d_ij`).
+    /// maximum `d_ij`). When the object also turned, the largest distance a touching point of
+    /// the moving object travelled from first touch to its current place.
     pub depth: Real,
     /// World-space unit direction of travel `D_u` the reconstruction used.
     pub direction: Vector,
@@ -104,6 +107,12 @@ pub struct ContactConfiguration {
     /// Fraction of the step at which the first touch happened (0 = previous pose, 1 = current
     /// pose); `None` when it is not on this step's trajectory or the state is `Separated`.
     pub time_of_impact: Option<Real>,
+    /// The moving object's world pose at first touch. For a translation (the paper's case) it
+    /// is the current pose moved by [`ContactConfiguration::reversing_vector`]; when the object
+    /// also turned over the step it is the pose on its path
+    /// ([`crate::geometry::RigidMotion`]) where it first touched, orientation included: set
+    /// the object there to undo the penetration. The current pose when nothing is to undo.
+    pub touch_pose: Pose,
     /// The contact regions at first touch (several for non-convex objects touching in several
     /// places). Empty when separated.
     pub patches: Vec<ContactPatch>,

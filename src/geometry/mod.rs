@@ -1,18 +1,23 @@
 //! Pure geometry: contact reconstruction by inverse trajectory mapping (paper section 2,
 //! eq. 1-3). No rapier pipeline here: plain poses, meshes and slices.
 //!
-//! - [`TouchMesh`]: a parry `TriMesh` plus adjacency, built once per mesh.
+//! - [`TouchMesh`]: a parry `TriMesh` plus adjacency, built once per mesh (from any collider
+//!   shape with a surface: [`TouchMesh::from_shape`]).
 //! - [`Reconstructor`]: walks the moving object back along its trajectory to first touch.
 //! - [`ContactConfiguration`]: state, reversing vector and the classified contact patches.
 
 mod classify;
 mod contact;
 pub mod generators;
+mod hull;
+mod motion;
 mod reconstruction;
+mod shapes;
 mod touch_mesh;
 
 pub use contact::{
     ContactConfiguration, ContactKind, ContactPatch, ContactPoint, DirectionSource, TouchState,
 };
+pub use motion::RigidMotion;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
 pub use touch_mesh::{safe_step_length, Feature, TouchMesh, TouchMeshError};

@@ -2,7 +2,9 @@
 //!
 //! # The method (section 2 of the paper)
 //! The moving object `M` went from its previous pose to its current one by a translation `D`
-//! (its rotation, if any, is kept at the current orientation). Walking it back along `-D` by a
+//! (a motion that also turns is handled in `motion.rs`, which brackets the first touch on the
+//! rotating path and finishes with this file's method over a sub-step that is a translation to
+//! within the tolerance). Walking it back along `-D` by a
 //! distance `s` gives the configuration `M(s)`. The first touch on the trajectory is the largest
 //! `s` in `[0, |D|]` at which the two surfaces meet. In 3D the surfaces of two polyhedra first
 //! meet in one of three ways, and each gives `s` by a scalar product:
@@ -29,7 +31,7 @@
 //!   duplicates); the full event scan used for perforation tests each vertex-triangle and
 //!   edge-edge pair once (stamp arrays, no hashing).
 //! - The state (Fig. 1) is decided by tests of the pose itself: a transversal crossing of the
-//!   two surfaces, or (for closed meshes) one object inside the other.
+//!   two surfaces, or one object inside the other (the outer one closed).
 //! - If the previous pose already penetrated (or a rotation caused the penetration) the first
 //!   touch is not on the step: the reversing vector then goes to the nearest non-penetrating
 //!   position along `-D` beyond the start of the step ([`ContactConfiguration::on_trajectory`]
@@ -39,6 +41,7 @@
 
 use super::classify::{build_patches, Event};
 use super::contact::{ContactConfiguration, DirectionSource, TouchState};
+use super::motion::{bounding_radius, RigidMotion};
 use super::touch_mesh::{Feature, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
@@ -256,9 +259,14 @@ impl Reconstructor {
     ///
     /// - `pos_fixed`: the fixed object's pose;
     /// - `pos_moving`: the moving object's pose now;
-    /// - `prev_pos_moving`: its pose at the previous step. `D` is the translation between the
-    ///   two. A rotation between them is ignored: the object is walked back along `-D` at its
-    ///   current orientation.
+    /// - `prev_pos_moving`: its pose at the previous step.
+    ///
+    /// The object is walked back along its motion between the two poses, a [`RigidMotion`]
+    /// turning about the centre of its bounding box: a pure translation `D` when the two
+    /// orientations agree (the paper's method: the reversing vector is parallel to `-D`), a
+    /// translation and rotation otherwise (the result is then a touch pose on that path,
+    /// [`ContactConfiguration::touch_pose`]). Use [`Reconstructor::reconstruct_motion`] to turn
+    /// about the body's real centre of mass, as the rapier integration does.
     ///
     /// # Errors
     /// [`ReconstructionError::NonFinitePose`] if a pose has a NaN or infinite component.
@@ -270,9 +278,117 @@ impl Reconstructor {
         pos_moving: &Pose,
         prev_pos_moving: &Pose,
     ) -> Result<ContactConfiguration, ReconstructionError> {
-        if !(pos_fixed.is_finite() && pos_moving.is_finite() && prev_pos_moving.is_finite()) {
+        let center = moving.local_aabb().center();
+        let motion = RigidMotion::new(*prev_pos_moving, *pos_moving, center);
+        self.reconstruct_motion(fixed, pos_fixed, moving, &motion)
+    }
+
+    /// Reconstructs the contact configuration of `moving`, which followed `motion` over the
+    /// step (its current pose is `motion.end`), against `fixed` at `pos_fixed`.
+    ///
+    /// - When the motion turns every point of `moving` by less than the tolerance, it is a
+    ///   translation and the paper's method runs unchanged (eq. 1-3 along `-D`).
+    /// - Otherwise first touch is searched along the real path (`docs/method.md` §2.6):
+    ///   samples of the path spaced so that neither object can be skipped, a bisection on "penetrating" down to a sub-step over which the rotation moves
+    ///   no point by more than the tolerance, and there the exact translation method, in
+    ///   `f64`, on the touching features. The result is the pose on the path where the objects
+    ///   first touch ([`ContactConfiguration::touch_pose`]), within the tolerance.
+    /// - A corner that dips in and out between two samples (spacing below half the larger
+    ///   smallest extent of the two objects) is not seen.
+    ///
+    /// # Errors
+    /// [`ReconstructionError::NonFinitePose`] if a pose or the centre is NaN or infinite.
+    ///
+    /// # Example
+    /// A cube spinning about the vertical axis while it falls onto a slab is walked back to the
+    /// pose on its path where it first touched, orientation included:
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// let slab = TouchMesh::from_shape(&Cuboid::new(Vector::new(2.0, 0.5, 2.0))).unwrap();
+    /// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
+    /// let slab_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+    /// let before = Pose::from_translation(Vector::new(0.0, 0.8, 0.0));
+    /// let now = Pose::from_parts(Vector::new(0.0, 0.3, 0.0), Rotation::from_rotation_y(0.5));
+    /// let motion = RigidMotion::new(before, now, Vector::ZERO);
+    /// let c = Reconstructor::default().reconstruct_motion(&slab, &slab_pose, &cube, &motion).unwrap();
+    /// assert_eq!(c.state, TouchState::Penetrating);
+    /// // It touched 0.2 m back, when it had turned 0.5 * 0.3 / 0.5 = 0.3 rad.
+    /// assert!((c.touch_pose.translation.y - 0.5).abs() < 1e-5);
+    /// assert!((c.touch_pose.rotation.angle_between(Rotation::from_rotation_y(0.3))).abs() < 1e-4);
+    /// ```
+    pub fn reconstruct_motion(
+        &mut self,
+        fixed: &TouchMesh,
+        pos_fixed: &Pose,
+        moving: &TouchMesh,
+        motion: &RigidMotion,
+    ) -> Result<ContactConfiguration, ReconstructionError> {
+        if !(pos_fixed.is_finite() && motion.is_finite()) {
             return Err(ReconstructionError::NonFinitePose);
         }
+        let scale = fixed.scale().max(moving.scale()) as f64;
+        let tol = (self.options.tolerance as f64).clamp(1e-9, 1e-3) * scale;
+        let radius = bounding_radius(moving, motion.local_center);
+        let (q0, q1) = (
+            motion.start.rotation.as_dquat().normalize(),
+            motion.end.rotation.as_dquat().normalize(),
+        );
+        if q0.angle_between(q1) * radius <= tol {
+            return self.translate_back(fixed, pos_fixed, moving, &motion.end, &motion.start);
+        }
+        Ok(self.rotate_back(fixed, pos_fixed, moving, motion, tol, radius))
+    }
+
+    /// The relative frame of `moving` at world pose `pose` against `fixed` at `pos_fixed`,
+    /// travelling along world direction `u_world`, with a fresh stamp and a prepared workspace.
+    pub(super) fn frame_at(
+        &mut self,
+        fixed: &TouchMesh,
+        pos_fixed: &Pose,
+        moving: &TouchMesh,
+        pose: &Pose,
+        u_world: DVec3,
+        tol: f64,
+    ) -> Frame {
+        let (rf, tf) = dpose(pos_fixed);
+        let (rm, tm) = dpose(pose);
+        let rf_inv = rf.conjugate();
+        self.ws.prepare(fixed, moving);
+        Frame {
+            rot: rf_inv * rm,
+            tra: rf_inv * (tm - tf),
+            u: rf_inv * u_world,
+            tol,
+            stamp: self.ws.stamp(),
+        }
+    }
+
+    /// The paper's method along a translation (the orientation of `pos_moving` is kept).
+    pub(super) fn translate_back(
+        &mut self,
+        fixed: &TouchMesh,
+        pos_fixed: &Pose,
+        moving: &TouchMesh,
+        pos_moving: &Pose,
+        prev_pos_moving: &Pose,
+    ) -> Result<ContactConfiguration, ReconstructionError> {
+        let mut c =
+            self.translate_back_inner(fixed, pos_fixed, moving, pos_moving, prev_pos_moving)?;
+        c.touch_pose = Pose::from_parts(
+            pos_moving.translation + c.reversing_vector,
+            pos_moving.rotation,
+        );
+        Ok(c)
+    }
+
+    fn translate_back_inner(
+        &mut self,
+        fixed: &TouchMesh,
+        pos_fixed: &Pose,
+        moving: &TouchMesh,
+        pos_moving: &Pose,
+        prev_pos_moving: &Pose,
+    ) -> Result<ContactConfiguration, ReconstructionError> {
         let (rf, tf) = dpose(pos_fixed);
         let (rm, tm) = dpose(pos_moving);
         let rf_inv = rf.conjugate();
@@ -320,6 +436,7 @@ impl Reconstructor {
             direction_source: source,
             on_trajectory: true,
             time_of_impact: None,
+            touch_pose: *pos_moving,
             patches: Vec::new(),
             candidate_pairs: 0,
         };
@@ -473,11 +590,13 @@ impl Reconstructor {
         };
         let extent =
             reach(fixed) + reach(moving) + fr.tra.length() + s_lo_box.abs() + s_hi_box.abs();
-        if !extent.is_finite() || extent >= 1.0e8 {
+        // (The cast divides coordinates by the scale: what matters is the extent in scales.)
+        if !extent.is_finite() || extent >= 1.0e6 * scale {
             return None;
         }
-        // GJK runs in f32 and stops 1.2e-6 (absolute) from the Minkowski difference.
-        let window = (1.0e-4 * scale).max(1.0e-5).max(100.0 * tol);
+        // GJK runs in f32 on coordinates divided by `scale` (see `convex_cast`): its absolute
+        // stopping distance, 1.2e-6, is then 1.2e-6 of the scale at every scale.
+        let window = (1.0e-4 * scale).max(100.0 * tol);
         let pad = 1.0e-3 * scale + window;
         let s_from = s_hi_box + pad;
         let (t, w1, w2) = self.convex_cast(fixed, moving, fr, s_from, fr.u)?;
@@ -518,6 +637,10 @@ impl Reconstructor {
     /// GJK ray cast of the moving mesh, walked back to `s_from`, travelling along unit `dir`
     /// (fixed frame): the distance to contact, the witness on the fixed mesh (fixed frame) and
     /// on the moving mesh (its own frame). `None` if GJK misses or does not converge.
+    ///
+    /// parry's GJK stops at an absolute distance (`gjk::eps_tol()`, 1.2e-6): at a centimetre
+    /// that is 1e-4 of the object, at 0.1 mm it is 1 %. The cast therefore runs on coordinates
+    /// divided by the pair's scale, so its tolerances are relative at every scale.
     fn convex_cast(
         &mut self,
         fixed: &TouchMesh,
@@ -526,22 +649,27 @@ impl Reconstructor {
         s_from: f64,
         dir: DVec3,
     ) -> Option<(f64, Vector, Vector)> {
-        let pos12 = Pose::from_parts((fr.tra - s_from * fr.u).as_vec3(), fr.rot.as_quat());
+        let scale = fixed.scale().max(moving.scale()) as f64;
+        let k = 1.0 / scale;
+        let pos12 = Pose::from_parts((k * (fr.tra - s_from * fr.u)).as_vec3(), fr.rot.as_quat());
         let g1 = HillClimb {
             mesh: fixed,
             warm: Cell::new(self.ws.warm[0]),
+            k: k as Real,
         };
         let g2 = HillClimb {
             mesh: moving,
             warm: Cell::new(self.ws.warm[1]),
+            k: k as Real,
         };
         let hit =
             gjk::directional_distance(&pos12, &g1, &g2, dir.as_vec3(), &mut VoronoiSimplex::new());
         self.ws.warm = [g1.warm.get(), g2.warm.get()];
         let (t, _, w1, w2) = hit?;
         // A zero distance means the cast started in contact: no witnesses.
+        let (t, w1, w2) = (t as f64 * scale, w1 * scale as Real, w2);
         (t.is_finite() && t > 0.0 && w1.is_finite() && w2.is_finite())
-            .then(|| (t as f64, w1, pos12.inverse_transform_point(w2)))
+            .then(|| (t, w1, pos12.inverse_transform_point(w2) * scale as Real))
     }
 
     /// Exact events of the convex path: every touch within `window` of the GJK estimate `s_g`
@@ -846,8 +974,8 @@ impl Reconstructor {
     }
 
     /// Do the objects interpenetrate with the moving one walked back by `s`? A transversal
-    /// crossing of the surfaces, or (closed meshes only) one inside the other.
-    fn penetrating_at(
+    /// crossing of the surfaces, or one inside the other (the outer one closed).
+    pub(super) fn penetrating_at(
         &mut self,
         fixed: &TouchMesh,
         moving: &TouchMesh,
@@ -857,13 +985,20 @@ impl Reconstructor {
         let shift = -s * fr.u;
         // Quick sufficient test first: the vertex of each object deepest along the motion lies
         // inside the other (closed) one, farther than the tolerance from its surface.
-        if fixed.is_closed() && moving.is_closed() {
-            let inv = fr.rot.conjugate();
+        // (Containment needs only the container closed: an open mover, even a single
+        // triangle, wholly inside a closed mesh penetrates it.)
+        let inv = fr.rot.conjugate();
+        if fixed.is_closed() {
             let v = support_vertex(moving, (inv * fr.u).as_vec3());
             let p = fr.moving_point(moving.vertices()[v as usize]) + shift;
+            if deep_inside(fixed, p, fr.tol) {
+                return true;
+            }
+        }
+        if moving.is_closed() {
             let w = support_vertex(fixed, (-fr.u).as_vec3());
             let q = inv * (fixed.vertices()[w as usize].as_dvec3() - shift - fr.tra);
-            if deep_inside(fixed, p, fr.tol) || deep_inside(moving, q, fr.tol) {
+            if deep_inside(moving, q, fr.tol) {
                 return true;
             }
         }
@@ -884,19 +1019,14 @@ impl Reconstructor {
                 return true;
             }
         }
-        if fixed.is_closed() && moving.is_closed() {
-            // A sample point of each surface inside the other one.
-            let inv = fr.rot.conjugate();
-            let m_in_f = sample_inside(moving, fixed, |p| fr.moving_point(p) + shift);
-            if m_in_f == Some(true) {
-                return true;
-            }
-            let f_in_m = sample_inside(fixed, moving, |p| inv * (p.as_dvec3() - shift - fr.tra));
-            if f_in_m == Some(true) {
-                return true;
-            }
+        // A sample point of each surface inside the other one, when that one is closed.
+        if fixed.is_closed()
+            && sample_inside(moving, fixed, |p| fr.moving_point(p) + shift) == Some(true)
+        {
+            return true;
         }
-        false
+        moving.is_closed()
+            && sample_inside(fixed, moving, |p| inv * (p.as_dvec3() - shift - fr.tra)) == Some(true)
     }
 
     /// Did the objects overlap somewhere strictly between the first touch and now?
@@ -943,18 +1073,19 @@ enum ConvexTouch {
     Touching,
 }
 
-/// A convex mesh as a parry support map: support points by hill climbing
+/// A convex mesh scaled by `k` as a parry support map: support points by hill climbing
 /// ([`TouchMesh::convex_support`]) from the previous answer.
 struct HillClimb<'a> {
     mesh: &'a TouchMesh,
     warm: Cell<u32>,
+    k: Real,
 }
 
 impl SupportMap for HillClimb<'_> {
     fn local_support_point(&self, dir: Vector) -> Vector {
         let v = self.mesh.convex_support(dir, self.warm.get()).unwrap_or(0);
         self.warm.set(v);
-        self.mesh.vertices()[v as usize]
+        self.mesh.vertices()[v as usize] * self.k
     }
 }
 

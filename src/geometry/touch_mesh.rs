@@ -1,10 +1,15 @@
 //! [`TouchMesh`]: a parry [`TriMesh`] plus the adjacency the reconstruction needs, built once.
 
+mod convex;
+mod weld;
+
 use crate::math::{Real, Vector};
+use convex::{convex_data, ConvexData};
 use parry3d::bounding_volume::Aabb;
 use parry3d::partitioning::Bvh;
-use parry3d::shape::{Shape, TriMesh, TriMeshFlags};
+use parry3d::shape::{ShapeType, TriMesh, TriMeshFlags};
 use std::collections::HashMap;
+use weld::WELD_RELATIVE_TOLERANCE;
 
 /// Why a [`TouchMesh`] could not be built. Each variant says how to fix the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -28,10 +33,26 @@ pub enum TouchMeshError {
     /// Every triangle is degenerate (zero area) or a duplicate: nothing is left to touch.
     #[error("all {0} triangles are degenerate or duplicated")]
     AllTrianglesDegenerate(u32),
-    /// This parry shape has no triangle-mesh form the crate knows how to build.
-    /// Convert it yourself (e.g. `to_trimesh`) and use [`TouchMesh::new`].
-    #[error("this shape type cannot be converted to a triangle mesh")]
-    UnsupportedShape,
+    /// This parry shape has no finite triangle surface ([`TouchMesh::from_shape`] lists the
+    /// shapes that have one). `reason` says why and what to use instead.
+    #[error("a {shape:?} has no finite triangle surface: {reason}")]
+    UnsupportedShape {
+        /// The shape's type.
+        shape: ShapeType,
+        /// Why it has no surface, and what to give instead.
+        reason: &'static str,
+    },
+    /// Part `part` of a compound shape has no finite triangle surface (as for
+    /// [`TouchMeshError::UnsupportedShape`]), so the compound has none either.
+    #[error("part {part} of the compound is a {shape:?}, which has no finite triangle surface: {reason}")]
+    UnsupportedCompoundPart {
+        /// The part's index in `Compound::shapes`.
+        part: u32,
+        /// The part's shape type.
+        shape: ShapeType,
+        /// Why it has no surface, and what to give instead.
+        reason: &'static str,
+    },
     /// parry refused the mesh.
     #[error("parry could not build the TriMesh: {0}")]
     Parry(String),
@@ -43,9 +64,10 @@ pub enum TouchMeshError {
 /// their numbering out of the way, see [`TouchMesh::dropped_triangles`]).
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Feature {
-    /// A vertex, by index into the vertex buffer.
+    /// A vertex, by index into the vertex buffer (of copies welded together, the lowest index;
+    /// see [`TouchMesh::new`]).
     Vertex(u32),
-    /// An edge, by its two vertex indices (smallest first).
+    /// An edge, by its two vertex indices (smallest first, welded as for `Vertex`).
     Edge([u32; 2]),
     /// A triangle, by index into the user's index buffer.
     Face(u32),
@@ -71,11 +93,20 @@ impl Feature {
 ///
 /// # Bad input
 /// - Empty meshes, non-finite vertices and out-of-range indices are errors.
-/// - Degenerate (zero-area) and duplicated triangles are dropped; their original indices are
-///   listed by [`TouchMesh::dropped_triangles`] so nothing is lost silently.
+/// - Duplicated vertices are welded: a triangle soup (every triangle with its own copies of its
+///   vertices, as modelling tools export it) becomes one connected surface, so a face contact
+///   is one patch, not one fragment per triangle. Vertices closer than `1e-6 ×` the
+///   bounding-box diagonal are one; the triangles are renumbered to the lowest user index of
+///   each group, the vertex buffer stays the user's ([`TouchMesh::welded_vertices`],
+///   [`TouchMesh::welded_to`]).
+/// - Degenerate triangles (zero area: height over the longest edge below `1e-7 ×` the largest
+///   bounding-box extent) and duplicated triangles (after welding) are dropped; their original
+///   indices are listed by [`TouchMesh::dropped_triangles`] so nothing is lost silently.
 /// - Open and non-manifold meshes are accepted and treated as *shells* (a thin TriMesh floor is
 ///   an open mesh): every touch between surfaces is found, but "one object is entirely inside
-///   the other" can only be detected when both meshes are closed ([`TouchMesh::is_closed`]).
+///   the other" can only be detected when the outer one is closed ([`TouchMesh::is_closed`]):
+///   an open mover (even one triangle) wholly inside a closed mesh penetrates it, and one that
+///   crosses a closed mesh within a step is [`Perforated`](super::TouchState::Perforated).
 ///
 /// # Example
 /// ```
@@ -107,16 +138,9 @@ pub struct TouchMesh {
     vertex_tris: Vec<u32>,
     /// Present when the mesh bounds a convex solid.
     convex: Option<ConvexData>,
-}
-
-/// What a convex mesh keeps for fast support-point queries.
-#[derive(Clone)]
-struct ConvexData {
-    /// The support vertex for each of 26 fixed directions (the starting points of hill climbing).
-    directory: Vec<u32>,
-    /// Per vertex: the outward normal of its plane when every neighbour lies on one plane
-    /// through it (a vertex inside a flat face), else zero.
-    flat_normal: Vec<Vector>,
+    /// Per user vertex, the vertex that stands for it in the triangles (empty: none welded).
+    weld: Vec<u32>,
+    welded: usize,
 }
 
 impl std::fmt::Debug for TouchMesh {
@@ -127,6 +151,7 @@ impl std::fmt::Debug for TouchMesh {
             .field("edges", &self.edges.len())
             .field("closed", &self.closed)
             .field("dropped_triangles", &self.dropped.len())
+            .field("welded_vertices", &self.welded)
             .finish()
     }
 }
@@ -136,6 +161,27 @@ const NONE: u32 = u32::MAX;
 impl TouchMesh {
     /// Builds a touch mesh from a vertex and an index buffer (counter-clockwise triangles are
     /// conventional but not required: the reconstruction does not rely on orientation).
+    ///
+    /// # Welding
+    /// Vertices used by the triangles that lie within `1e-6 ×` the diagonal of their bounding
+    /// box of each other are welded into one: each triangle is renumbered to the lowest user
+    /// index of the group (a grid hash, linear time). The vertex buffer is kept as given, so
+    /// [`Feature::Vertex`] and [`Feature::Edge`] still name the user's vertices, always the
+    /// group's lowest index; the other copies are used by no triangle. Triangles that welding
+    /// makes degenerate or duplicate are dropped like any other
+    /// ([`TouchMesh::dropped_triangles`]).
+    ///
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// // A unit square as a soup: two triangles, each with its own three vertices.
+    /// let v = [[0., 0.], [1., 0.], [1., 1.], [0., 0.], [1., 1.], [0., 1.]]
+    ///     .map(|[x, z]| Vector::new(x, 0.0, z))
+    ///     .to_vec();
+    /// let m = TouchMesh::new(v, vec![[0, 2, 1], [3, 5, 4]]).unwrap();
+    /// assert_eq!(m.welded_vertices(), 2); // 3 -> 0 and 4 -> 2
+    /// assert_eq!(m.indices()[1], [0, 5, 2]);
+    /// assert_eq!(m.num_edges(), 5); // the diagonal is shared
+    /// ```
     ///
     /// # Errors
     /// See [`TouchMeshError`].
@@ -157,21 +203,51 @@ impl TouchMesh {
             }
         }
 
+        // Weld the vertices the triangles use.
+        let mut used = vec![false; vertices.len()];
+        for &v in indices.iter().flatten() {
+            used[v as usize] = true;
+        }
+        let used_box = Aabb::from_points(
+            (0..vertices.len())
+                .filter(|&v| used[v])
+                .map(|v| vertices[v]),
+        );
+        let weld_tol = WELD_RELATIVE_TOLERANCE * used_box.extents().length();
+        let mut weld = weld::weld_map(&vertices, &used, weld_tol);
+        let welded = weld
+            .iter()
+            .enumerate()
+            .filter(|&(v, &r)| r != v as u32)
+            .count();
+        let indices: Vec<[u32; 3]> = if welded == 0 {
+            weld = Vec::new();
+            indices
+        } else {
+            indices
+                .iter()
+                .map(|t| t.map(|v| weld[v as usize]))
+                .collect()
+        };
+
         // Drop degenerate and duplicate triangles, remembering the user's numbering.
         let extent = Aabb::from_points(vertices.iter().copied())
             .extents()
             .max_element();
-        let area_eps = (extent * 1.0e-7).powi(2);
+        // Flat: the height over the longest edge is below `1e-7 ×` the extent (in `f64`, so
+        // the test is the same at every scale).
+        let flat = 1.0e-7 * extent as f64;
         let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(indices.len());
         let mut kept = Vec::with_capacity(indices.len());
         let mut tri_to_user = Vec::with_capacity(indices.len());
         let mut dropped = Vec::new();
         for (t, tri) in indices.iter().enumerate() {
-            let [a, b, c] = tri.map(|i| vertices[i as usize]);
+            let [a, b, c] = tri.map(|i| vertices[i as usize].as_dvec3());
+            let longest = (b - a).length().max((c - b).length()).max((a - c).length());
             let degenerate = tri[0] == tri[1]
                 || tri[1] == tri[2]
                 || tri[0] == tri[2]
-                || (b - a).cross(c - a).length_squared() <= area_eps;
+                || (b - a).cross(c - a).length() <= flat * longest;
             let mut key = *tri;
             key.sort_unstable();
             if degenerate || seen.insert(key, ()).is_some() {
@@ -187,35 +263,10 @@ impl TouchMesh {
 
         let trimesh = TriMesh::with_flags(vertices, kept, TriMeshFlags::empty())
             .map_err(|e| TouchMeshError::Parry(format!("{e:?}")))?;
-        Ok(Self::with_adjacency(trimesh, tri_to_user, dropped))
-    }
-
-    /// Builds a touch mesh from any parry shape that has a triangle-mesh form: `TriMesh`,
-    /// `Cuboid`, `ConvexPolyhedron`, and round shapes (`Ball`, `Cylinder`, `Cone`, `Capsule`)
-    /// tessellated with parry's default subdivisions.
-    ///
-    /// # Errors
-    /// [`TouchMeshError::UnsupportedShape`] for other shapes (compounds, height fields,
-    /// voxels...), plus the errors of [`TouchMesh::new`].
-    pub fn from_shape(shape: &dyn Shape) -> Result<Self, TouchMeshError> {
-        let (v, i) = if let Some(m) = shape.as_trimesh() {
-            (m.vertices().to_vec(), m.indices().to_vec())
-        } else if let Some(c) = shape.as_cuboid() {
-            c.to_trimesh()
-        } else if let Some(c) = shape.as_convex_polyhedron() {
-            c.to_trimesh()
-        } else if let Some(b) = shape.as_ball() {
-            b.to_trimesh(16, 16)
-        } else if let Some(c) = shape.as_cylinder() {
-            c.to_trimesh(24)
-        } else if let Some(c) = shape.as_cone() {
-            c.to_trimesh(24)
-        } else if let Some(c) = shape.as_capsule() {
-            c.to_trimesh(16, 8)
-        } else {
-            return Err(TouchMeshError::UnsupportedShape);
-        };
-        Self::new(v, i)
+        let mut mesh = Self::with_adjacency(trimesh, tri_to_user, dropped);
+        mesh.weld = weld;
+        mesh.welded = welded;
+        Ok(mesh)
     }
 
     fn with_adjacency(trimesh: TriMesh, tri_to_user: Vec<u32>, dropped: Vec<u32>) -> Self {
@@ -327,6 +378,8 @@ impl TouchMesh {
             tri_normals,
             closed,
             non_manifold_edges,
+            weld: Vec::new(),
+            welded: 0,
         }
     }
 
@@ -342,11 +395,13 @@ impl TouchMesh {
     pub fn vertices(&self) -> &[Vector] {
         self.trimesh.vertices()
     }
-    /// The kept triangles, in internal order (see [`TouchMesh::user_triangle`]).
+    /// The kept triangles, in internal order (see [`TouchMesh::user_triangle`]), with welded
+    /// vertices renumbered (see [`TouchMesh::new`]).
     pub fn indices(&self) -> &[[u32; 3]] {
         self.trimesh.indices()
     }
-    /// Number of vertices.
+    /// Number of vertices in the user's buffer (welded copies and vertices no triangle uses
+    /// included).
     pub fn num_vertices(&self) -> usize {
         self.trimesh.vertices().len()
     }
@@ -390,6 +445,16 @@ impl TouchMesh {
     pub fn dropped_triangles(&self) -> &[u32] {
         &self.dropped
     }
+    /// How many vertices were welded into a lower-numbered copy (see [`TouchMesh::new`]): the
+    /// number of vertices the triangles no longer use because another stands for them.
+    pub fn welded_vertices(&self) -> usize {
+        self.welded
+    }
+    /// The vertex that stands for user vertex `v` in the triangles: `v` itself, or the lowest
+    /// index of the copies it was welded with (see [`TouchMesh::new`]).
+    pub fn welded_to(&self, v: u32) -> u32 {
+        self.weld.get(v as usize).copied().unwrap_or(v)
+    }
     /// Unit normal of internal triangle `t` (counter-clockwise winding), in the mesh frame.
     pub fn triangle_normal(&self, t: u32) -> Vector {
         self.tri_normals[t as usize]
@@ -401,85 +466,6 @@ impl TouchMesh {
             self.vertex_tri_offsets[v as usize + 1] as usize,
         );
         &self.vertex_tris[a..b]
-    }
-
-    /// `true` if the mesh bounds a convex solid: closed, edge-manifold, connected, consistently
-    /// oriented, and locally convex at every vertex (each neighbour lies on or below the plane
-    /// of every triangle around the vertex, to `1e-6` of [`TouchMesh::scale`]). A closed
-    /// surface that is locally convex everywhere bounds a convex set (Tietze-Nakajima), so the
-    /// check is exact up to that tolerance; a self-intersecting mesh can fool it.
-    ///
-    /// Convex pairs take a faster path in [`Reconstructor`](super::Reconstructor): parry's GJK
-    /// ray cast on the Minkowski difference finds the first touch, with support points found
-    /// by hill climbing over the vertex graph.
-    ///
-    /// ```
-    /// use rapier_touch::prelude::*;
-    /// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
-    /// assert!(cube.is_convex());
-    /// // An L-shaped prism is closed but not convex.
-    /// let (v, i) = rapier_touch::geometry::generators::extruded_polygon(
-    ///     &[[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]],
-    ///     1.0,
-    /// )
-    /// .unwrap();
-    /// let l = TouchMesh::new(v, i).unwrap();
-    /// assert!(l.is_closed() && !l.is_convex());
-    /// ```
-    pub fn is_convex(&self) -> bool {
-        self.convex.is_some()
-    }
-
-    /// Strict hill climbing over the vertex graph from `start`: moves to a neighbour farther
-    /// along `dir` until none is. A local maximum of `dir · x`, the support vertex on a convex
-    /// mesh (see [`TouchMesh::convex_support`] for the one exception).
-    pub(crate) fn hill_climb(&self, start: u32, dir: Vector) -> u32 {
-        let v = self.vertices();
-        let mut best = start;
-        let mut best_d = v[best as usize].dot(dir);
-        loop {
-            let mut improved = false;
-            for &w in self.vertex_neighbours(best) {
-                let d = v[w as usize].dot(dir);
-                if d > best_d {
-                    (best, best_d) = (w, d);
-                    improved = true;
-                }
-            }
-            if !improved {
-                return best;
-            }
-        }
-    }
-
-    /// The vertex farthest along `dir` of a convex mesh: strict hill climbing over the vertex
-    /// graph from the best of `warm` (a previous answer) and a 26-direction directory. On a
-    /// convex surface every vertex that is not a maximum has a strictly better neighbour,
-    /// except a vertex inside the flat face opposite `dir` (the climb cannot end there unless
-    /// it starts there); if it does, all vertices are scanned. `None` for a mesh that is not
-    /// convex.
-    pub(crate) fn convex_support(&self, dir: Vector, warm: u32) -> Option<u32> {
-        let cd = self.convex.as_ref()?;
-        let v = self.vertices();
-        let climb = |start: u32| self.hill_climb(start, dir);
-        // Stuck inside the face opposite `dir`?
-        let stuck = |best: u32| cd.flat_normal[best as usize].dot(dir) < 0.0;
-        let warm_ok = (warm as usize) < v.len() && !self.vertex_triangles(warm).is_empty();
-        let mut start = cd.directory[0];
-        let mut start_d = v[start as usize].dot(dir);
-        for &c in cd.directory[1..].iter().chain(warm_ok.then_some(&warm)) {
-            let d = v[c as usize].dot(dir);
-            if d > start_d {
-                (start, start_d) = (c, d);
-            }
-        }
-        let best = climb(start);
-        if !stuck(best) {
-            return Some(best);
-        }
-        (0..v.len() as u32)
-            .filter(|&i| !self.vertex_triangles(i).is_empty())
-            .max_by(|&a, &b| v[a as usize].dot(dir).total_cmp(&v[b as usize].dot(dir)))
     }
 
     /// `true` if every edge has exactly two triangles (a closed, edge-manifold surface).
@@ -508,241 +494,10 @@ impl TouchMesh {
         self.scale
     }
 }
-
-/// Convexity check and support directory of a closed mesh (see [`TouchMesh::is_convex`]).
-#[allow(clippy::too_many_arguments)]
-fn convex_data(
-    vertices: &[Vector],
-    idx: &[[u32; 3]],
-    edges: &[[u32; 2]],
-    edge_tris: &[[u32; 2]],
-    neighbour_offsets: &[u32],
-    neighbours: &[u32],
-    vertex_tri_offsets: &[u32],
-    vertex_tris: &[u32],
-    scale: Real,
-) -> Option<ConvexData> {
-    use glamx::DVec3;
-    let nv = vertices.len();
-    let used = |v: usize| vertex_tri_offsets[v + 1] > vertex_tri_offsets[v];
-    // Consistent orientation: the two triangles of an edge run along it in opposite directions.
-    let runs = |t: u32, a: u32, b: u32| {
-        let tri = idx[t as usize];
-        (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
-    };
-    for (e, &[a, b]) in edges.iter().enumerate() {
-        let [t1, t2] = edge_tris[e];
-        if t1 == NONE || t2 == NONE || runs(t1, a, b) == runs(t2, a, b) {
-            return None;
-        }
-    }
-    // Connected.
-    let first = (0..nv).find(|&v| used(v))?;
-    let mut seen = vec![false; nv];
-    let mut stack = vec![first as u32];
-    seen[first] = true;
-    let mut reached = 1;
-    while let Some(v) = stack.pop() {
-        let (a, b) = (
-            neighbour_offsets[v as usize] as usize,
-            neighbour_offsets[v as usize + 1] as usize,
-        );
-        for &w in &neighbours[a..b] {
-            if !seen[w as usize] {
-                seen[w as usize] = true;
-                reached += 1;
-                stack.push(w);
-            }
-        }
-    }
-    if reached != (0..nv).filter(|&v| used(v)).count() {
-        return None;
-    }
-    // Outward orientation from the sign of the enclosed volume.
-    let p = |v: u32| vertices[v as usize].as_dvec3();
-    let volume: f64 = idx
-        .iter()
-        .map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))))
-        .sum::<f64>()
-        / 6.0;
-    if volume == 0.0 || !volume.is_finite() {
-        return None;
-    }
-    let sign = volume.signum();
-    let normal = |t: u32| {
-        let [a, b, c] = idx[t as usize].map(p);
-        (b - a).cross(c - a).normalize_or_zero() * sign
-    };
-    // Local convexity at every vertex; flat vertices remember their plane.
-    let eps = 1.0e-6 * scale as f64;
-    let mut flat_normal = vec![Vector::ZERO; nv];
-    for v in 0..nv {
-        if !used(v) {
-            continue;
-        }
-        let pv = p(v as u32);
-        let nb = &neighbours[neighbour_offsets[v] as usize..neighbour_offsets[v + 1] as usize];
-        let tris = &vertex_tris[vertex_tri_offsets[v] as usize..vertex_tri_offsets[v + 1] as usize];
-        let mut flat = true;
-        let n0 = normal(tris[0]);
-        for &t in tris {
-            let n = normal(t);
-            if n == DVec3::ZERO {
-                return None;
-            }
-            for &w in nb {
-                if n.dot(p(w) - pv) > eps {
-                    return None;
-                }
-            }
-        }
-        for &w in nb {
-            if n0.dot(p(w) - pv).abs() > eps {
-                flat = false;
-            }
-        }
-        if flat {
-            flat_normal[v] = n0.as_vec3();
-        }
-    }
-    // Support vertices for the 26 directions of a 3x3x3 grid.
-    let mut directory = Vec::with_capacity(26);
-    for i in -1i32..=1 {
-        for j in -1i32..=1 {
-            for k in -1i32..=1 {
-                if (i, j, k) == (0, 0, 0) {
-                    continue;
-                }
-                let d = Vector::new(i as Real, j as Real, k as Real);
-                let best = (0..nv)
-                    .filter(|&v| used(v))
-                    .max_by(|&a, &b| vertices[a].dot(d).total_cmp(&vertices[b].dot(d)))?;
-                directory.push(best as u32);
-            }
-        }
-    }
-    Some(ConvexData {
-        directory,
-        flat_normal,
-    })
-}
-
 /// The paper's safe step length for a pair (section 2, case c): a translation shorter than the
 /// smallest bounding-box edge of both objects cannot carry one through the other.
 ///
 /// Zero when one of the meshes is flat; see [`TouchMesh::min_extent`].
 pub fn safe_step_length(a: &TouchMesh, b: &TouchMesh) -> Real {
     a.min_extent().min(b.min_extent())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::generators::{extruded_polygon, icosphere, subdivided_box};
-    use parry3d::shape::{Ball, Capsule, Cuboid};
-
-    fn mesh((v, i): (Vec<Vector>, Vec<[u32; 3]>)) -> TouchMesh {
-        TouchMesh::new(v, i).unwrap()
-    }
-
-    /// Directions on a Fibonacci sphere plus the exact axes and diagonals (which meet flat
-    /// faces and edges head-on, the plateaus of hill climbing).
-    fn directions() -> Vec<Vector> {
-        let mut d: Vec<Vector> = (0..600)
-            .map(|k| {
-                let z = 1.0 - 2.0 * (k as Real + 0.5) / 600.0;
-                let phi = k as Real * 2.399_963;
-                let r = (1.0 - z * z).sqrt();
-                Vector::new(r * phi.cos(), r * phi.sin(), z)
-            })
-            .collect();
-        for i in -1i32..=1 {
-            for j in -1i32..=1 {
-                for k in -1i32..=1 {
-                    if (i, j, k) != (0, 0, 0) {
-                        d.push(Vector::new(i as Real, j as Real, k as Real).normalize());
-                    }
-                }
-            }
-        }
-        d
-    }
-
-    #[test]
-    fn convexity_is_recognised() {
-        let convex = [
-            mesh(subdivided_box(Vector::new(0.5, 0.25, 0.5), 8)),
-            mesh(icosphere(0.3, 3)),
-            TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap(),
-            TouchMesh::from_shape(&Ball::new(0.4)).unwrap(),
-            TouchMesh::from_shape(&Capsule::new_y(0.5, 0.2)).unwrap(),
-        ];
-        for m in &convex {
-            assert!(m.is_convex(), "{m:?}");
-        }
-        // Not convex: an L prism, an open box, two separate cubes, a dented sphere.
-        let l = extruded_polygon(
-            &[
-                [0.0, 0.0],
-                [2.0, 0.0],
-                [2.0, 1.0],
-                [1.0, 1.0],
-                [1.0, 2.0],
-                [0.0, 2.0],
-            ],
-            1.0,
-        )
-        .unwrap();
-        assert!(!mesh(l).is_convex());
-        let (v, mut i) = subdivided_box(Vector::splat(0.5), 2);
-        i.pop();
-        assert!(!mesh((v, i)).is_convex());
-        let (mut v, mut i) = subdivided_box(Vector::splat(0.5), 1);
-        let n = v.len() as u32;
-        v.extend(v.clone().iter().map(|p| *p + Vector::X * 3.0));
-        i.extend(i.clone().iter().map(|t| t.map(|k| k + n)));
-        assert!(!mesh((v, i)).is_convex());
-        let (mut v, i) = icosphere(1.0, 3);
-        // The vertices of this sphere stand about 1 cm above the plane of their neighbours.
-        let mut dented = v.clone();
-        dented[7] *= 0.995;
-        assert!(
-            mesh((dented, i.clone())).is_convex(),
-            "still locally convex"
-        );
-        v[7] *= 0.97;
-        assert!(!mesh((v, i)).is_convex(), "a 3 cm dent in a 1 m sphere");
-    }
-
-    #[test]
-    fn hill_climbing_finds_the_support_vertex() {
-        let meshes = [
-            mesh(subdivided_box(Vector::new(0.5, 0.25, 0.5), 16)),
-            mesh(subdivided_box(Vector::new(0.05, 1.0, 0.3), 5)),
-            mesh(icosphere(0.35, 4)),
-            TouchMesh::from_shape(&Capsule::new_y(0.5, 0.2)).unwrap(),
-        ];
-        for m in &meshes {
-            let v = m.vertices();
-            let eps = 1e-6 * m.scale();
-            let mut warm = 0;
-            for d in directions() {
-                let best = v.iter().map(|p| p.dot(d)).fold(Real::MIN, Real::max);
-                // From a previous answer anywhere on the mesh, including the opposite face.
-                for start in [warm, 0, (v.len() / 2) as u32] {
-                    let s = m.convex_support(d, start).unwrap();
-                    assert!(v[s as usize].dot(d) >= best - eps, "{m:?} {d}");
-                    warm = s;
-                }
-            }
-        }
-        let l = mesh(
-            extruded_polygon(
-                &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 0.2], [0.0, 1.0]],
-                1.0,
-            )
-            .unwrap(),
-        );
-        assert_eq!(l.convex_support(Vector::Y, 0), None);
-    }
 }

@@ -1,7 +1,9 @@
 //! [`TouchHooks`]: rapier `PhysicsHooks` that replace the solver's view of a penetrating pair by
 //! the reconstructed first-touch configuration.
 
-use crate::geometry::{ContactConfiguration, ReconstructionOptions, Reconstructor, TouchMesh};
+use crate::geometry::{
+    ContactConfiguration, ReconstructionOptions, Reconstructor, RigidMotion, TouchMesh,
+};
 use crate::math::{Pose, Vector};
 use rapier3d::dynamics::{RigidBodyHandle, RigidBodySet};
 use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
@@ -167,8 +169,55 @@ pub(crate) fn body_motion(
         .unwrap_or(Vector::ZERO)
 }
 
+/// Where collider `c` was at the start of the step: its body's recorded pose times the
+/// collider's offset, or `pos` (its pose now) when the body has no history or it has no body.
+pub(crate) fn previous_collider_pose(
+    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    co: &rapier3d::geometry::Collider,
+    pos: Pose,
+) -> Pose {
+    co.parent()
+        .and_then(|b| prev_poses.get(&b))
+        .filter(|p| p.is_finite())
+        .map_or(pos, |p| match co.position_wrt_parent() {
+            Some(rel) => *p * *rel,
+            None => *p,
+        })
+}
+
+/// The motion of collider 2 relative to collider 1 over the last step, with collider 1 held
+/// at `pos1`: collider 2 starts where it was relative to collider 1 at the start of the step,
+/// ends at `pos2`, and turns about its body's centre of mass (the bounding-box centre of its
+/// mesh when the body has no mass).
+pub(crate) fn relative_motion(
+    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    bodies: &RigidBodySet,
+    co1: &rapier3d::geometry::Collider,
+    pos1: Pose,
+    co2: &rapier3d::geometry::Collider,
+    pos2: Pose,
+    mesh2: &TouchMesh,
+) -> RigidMotion {
+    let prev1 = previous_collider_pose(prev_poses, co1, pos1);
+    let prev2 = previous_collider_pose(prev_poses, co2, pos2);
+    let start = pos1 * (prev1.inverse() * prev2);
+    let center = co2
+        .parent()
+        .and_then(|h| bodies.get(h))
+        .filter(|b| b.mass() > 0.0)
+        .map(|b| {
+            let com = b.local_center_of_mass();
+            co2.position_wrt_parent()
+                .map_or(com, |rel| rel.inverse_transform_point(com))
+        })
+        .filter(|c| c.is_finite())
+        .unwrap_or_else(|| mesh2.local_aabb().center());
+    RigidMotion::new(start, pos2, center)
+}
+
 /// Reconstructs collider 2 against collider 1 (at the given world poses) along their relative
-/// motion over the last step. `None` when a mesh is missing or a pose is not finite.
+/// motion over the last step ([`relative_motion`]: translation and rotation). `None` when a
+/// mesh is missing or a pose is not finite.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn pair_configuration(
     rec: &mut Reconstructor,
@@ -184,10 +233,8 @@ pub(crate) fn pair_configuration(
     let (m1, m2) = (meshes.get(&c1)?, meshes.get(&c2)?);
     let (co1, co2) = (colliders.get(c1)?, colliders.get(c2)?);
     let (pos1, pos2) = (pos1?, pos2?);
-    let d1 = body_motion(prev_poses, bodies, co1.parent());
-    let d2 = body_motion(prev_poses, bodies, co2.parent());
-    let prev2 = Pose::from_parts(pos2.translation - (d2 - d1), pos2.rotation);
-    rec.reconstruct(&m1.mesh, &pos1, &m2.mesh, &pos2, &prev2)
+    let motion = relative_motion(prev_poses, bodies, co1, pos1, co2, pos2, &m2.mesh);
+    rec.reconstruct_motion(&m1.mesh, &pos1, &m2.mesh, &motion)
         .ok()
 }
 

@@ -2,8 +2,12 @@
 //! step guard, the tools' proxies and the contact report.
 
 use super::report::{PairReport, ToolFeedback};
-use super::touch_hooks::{body_motion, pair_configuration, CachedMesh, TouchHooks};
-use crate::geometry::{ReconstructionOptions, Reconstructor, TouchMesh, TouchState};
+use super::touch_hooks::{
+    body_motion, pair_configuration, previous_collider_pose, CachedMesh, TouchHooks,
+};
+use crate::geometry::{
+    ReconstructionOptions, Reconstructor, TouchMesh, TouchMeshError, TouchState,
+};
 use crate::math::{Pose, Real, Vector};
 use parry3d::bounding_volume::BoundingVolume;
 use rapier3d::dynamics::{IntegrationParameters, RigidBodyHandle};
@@ -22,6 +26,15 @@ pub struct TouchOptions {
     /// Correct poses between steps (the step guard). Default `true`. With `false` the crate only
     /// rewrites manifolds (hooks) and reports.
     pub correct_poses: bool,
+    /// Penetration tolerated for a body that already overlapped a fixed or kinematic collider
+    /// when the step began (a resting contact rapier is resolving with its own soft push-out).
+    /// Deeper than this after a step, the guard pushes the body back along rapier's contact
+    /// normal to this depth, so a tumbling or pressed body never digs into the floor. Resting
+    /// pairs of two dynamic bodies (a stack, whose soft contacts rapier lets overlap by about a
+    /// millimetre) are left to rapier. Default `9e-4` m: above rapier's usual resting
+    /// overlap (a resting stack is left to rapier and stays still), below the 1 mm a user sees.
+    /// Range `slop ..= 0.01`.
+    pub resting_slop: Real,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,
     /// Reconstruct and report touching pairs too. Default `false`: the guard then skips pairs
@@ -37,6 +50,7 @@ impl Default for TouchOptions {
     fn default() -> Self {
         Self {
             penetration_slop: 2.0e-4,
+            resting_slop: 9.0e-4,
             correct_poses: true,
             max_passes: 3,
             report_touching: false,
@@ -111,6 +125,8 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     odometers: HashMap<RigidBodyHandle, Real>,
     tracked: HashSet<ColliderHandle>,
     pair_states: HashMap<(ColliderHandle, ColliderHandle), PairState>,
+    /// Opted-in colliders whose shape has no touch mesh: the shape's address and why.
+    refused: HashMap<ColliderHandle, (usize, TouchMeshError)>,
 }
 
 impl Default for TouchPipeline<()> {
@@ -140,6 +156,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             odometers: HashMap::new(),
             tracked: HashSet::new(),
             pair_states: HashMap::new(),
+            refused: HashMap::new(),
         }
     }
 
@@ -147,6 +164,27 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// perforated.
     pub fn reports(&self) -> &[PairReport] {
         &self.reports
+    }
+
+    /// Opted-in colliders the crate cannot guard, with the reason: their shape has no finite
+    /// triangle surface ([`TouchMesh::from_shape`]: a half-space, a segment, a polyline). rapier
+    /// handles their contacts alone. Filled by each step (a changed shape is tried again).
+    ///
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::rapier3d::prelude::*;
+    /// let mut world = PhysicsWorld::default();
+    /// // A segment is a curve: it has no surface to touch.
+    /// let ground = world.insert_collider(ColliderBuilder::segment(Vector::ZERO, Vector::X), None);
+    /// let mut touch = TouchPipeline::default();
+    /// touch.track_collider(ground);
+    /// touch.step(&mut world);
+    /// let (h, why) = touch.refused_colliders().next().unwrap();
+    /// assert_eq!(h, ground);
+    /// assert!(matches!(why, TouchMeshError::UnsupportedShape { .. }));
+    /// ```
+    pub fn refused_colliders(&self) -> impl Iterator<Item = (ColliderHandle, &TouchMeshError)> {
+        self.refused.iter().map(|(h, (_, e))| (*h, e))
     }
 
     /// How many body poses the step guard corrected during the last step.
@@ -243,6 +281,13 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// Builds (or drops) the touch meshes of opted-in colliders.
     fn refresh_meshes(&mut self, colliders: &ColliderSet) {
         self.tracked.retain(|h| colliders.contains(*h));
+        self.refused.retain(|h, _| {
+            colliders.get(*h).is_some_and(|co| {
+                co.active_hooks()
+                    .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+                    || self.tracked.contains(h)
+            })
+        });
         let meshes = &mut self.hooks.meshes;
         meshes.retain(|h, _| colliders.contains(*h));
         for (h, co) in colliders.iter() {
@@ -255,11 +300,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 continue;
             }
             let ptr = Arc::as_ptr(&co.shared_shape().0) as *const u8 as usize;
-            if meshes.get(&h).is_some_and(|m| m.shape_ptr == ptr) {
+            if meshes.get(&h).is_some_and(|m| m.shape_ptr == ptr)
+                || self.refused.get(&h).is_some_and(|r| r.0 == ptr)
+            {
                 continue;
             }
             match TouchMesh::from_shape(co.shape()) {
                 Ok(mesh) => {
+                    self.refused.remove(&h);
                     meshes.insert(
                         h,
                         CachedMesh {
@@ -268,8 +316,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         },
                     );
                 }
-                Err(_) => {
+                Err(e) => {
                     meshes.remove(&h);
+                    self.refused.insert(h, (ptr, e));
                 }
             }
         }
@@ -348,19 +397,24 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let Some(co) = world.colliders.get(ch) else {
                         continue;
                     };
-                    let pose_now = co
-                        .position_wrt_parent()
-                        .map_or(*co.position(), |rel| body_pose * *rel);
-                    let fast = d.length() >= mesh.min_extent().min(prediction);
+                    let co_rel = co.position_wrt_parent().copied();
+                    let pose_now = co_rel.map_or(*co.position(), |rel| body_pose * rel);
+                    let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
+                    // How far a point of the collider may have travelled: translation plus the
+                    // arc of its rotation.
+                    let radius = co.shape().compute_local_bounding_sphere().radius
+                        + co.position_wrt_parent()
+                            .map_or(0.0, |p| p.translation.length());
+                    let turn = prev_pose.rotation.angle_between(pose_now.rotation) * radius;
+                    let fast = d.length() + turn >= mesh.min_extent().min(prediction);
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
                     let partners: Vec<ColliderHandle> = if fast || pass > 0 || is_tool {
-                        let prev_pose =
-                            Pose::from_parts(pose_now.translation - d, pose_now.rotation);
                         let swept = co
                             .shape()
                             .compute_aabb(&pose_now)
-                            .merged(&co.shape().compute_aabb(&prev_pose));
+                            .merged(&co.shape().compute_aabb(&prev_pose))
+                            .loosened(turn);
                         world
                             .intersect_aabb_conservative(swept, QueryFilter::default())
                             .map(|(h, _)| h)
@@ -419,14 +473,24 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     continue;
                                 }
                             }
-                            if let Ok(c) = parry3d::query::contact(
+                            // With a prediction of 0 parry answers `None` for separated
+                            // shapes; a contact with a positive distance is one of its wrong
+                            // answers (seen for a small tumbling cuboid on a large one: +1.1 mm
+                            // where a corner was 1.1 mm deep). Such pairs are reconstructed.
+                            let measured = parry3d::query::contact(
                                 &partner_pose,
                                 partner.shape(),
                                 &pose_now,
                                 co.shape(),
                                 0.0,
-                            ) {
-                                let overlap = c.map_or(0.0, |c| (-c.dist).max(0.0));
+                            )
+                            .ok()
+                            .and_then(|c| match c {
+                                None => Some(0.0),
+                                Some(c) if c.dist <= 0.0 => Some(-c.dist),
+                                Some(_) => None,
+                            });
+                            if let Some(overlap) = measured {
                                 self.pair_states.insert(
                                     (ch, ph),
                                     PairState {
@@ -453,48 +517,72 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         ) else {
                             continue;
                         };
+                        // A pair that already overlapped when the step began has no first touch
+                        // on this step's path: it is measured along rapier's own contact normal
+                        // instead (its exit along -D can be far away).
+                        let along_normal = if config.on_trajectory || !config.needs_correction() {
+                            None
+                        } else {
+                            rapier_normal(world, ph, ch).and_then(|n| {
+                                let mut rec = Reconstructor::new(ReconstructionOptions {
+                                    zero_motion_direction: Some(-n),
+                                    ..self.options.reconstruction
+                                });
+                                rec.reconstruct(
+                                    &partner_mesh,
+                                    &partner_pose,
+                                    &mesh,
+                                    &pose_now,
+                                    &pose_now,
+                                )
+                                .ok()
+                            })
+                        };
                         if pass == 0
                             && config.state != TouchState::Separated
                             && reported.insert((ph, ch))
                         {
-                            // A pair that already overlapped when the step began has no first
-                            // touch on this step's path: report it along rapier's own contact
-                            // normal instead (its exit along -D can be far away).
-                            let shown = if config.on_trajectory {
-                                None
-                            } else {
-                                rapier_normal(world, ph, ch).and_then(|n| {
-                                    let mut rec = Reconstructor::new(ReconstructionOptions {
-                                        zero_motion_direction: Some(-n),
-                                        ..self.options.reconstruction
-                                    });
-                                    rec.reconstruct(
-                                        &partner_mesh,
-                                        &partner_pose,
-                                        &mesh,
-                                        &pose_now,
-                                        &pose_now,
-                                    )
-                                    .ok()
-                                })
-                            };
                             self.reports.push(PairReport::new(
                                 ph,
                                 ch,
-                                shown.as_ref().unwrap_or(&config),
+                                along_normal.as_ref().unwrap_or(&config),
                             ));
                         }
-                        // Only a first touch on this step's own path is corrected: a pair that
-                        // already overlapped when the step began (a resting contact rapier is
-                        // pushing apart) is rapier's to resolve.
+                        let partner_dynamic = partner_body
+                            .and_then(|pb| world.bodies.get(pb))
+                            .is_some_and(|b| b.is_dynamic());
+                        // A first touch on this step's own path is undone to first touch. A pair
+                        // that already overlapped when the step began (a resting contact rapier
+                        // is resolving) against a fixed or kinematic partner is only pushed
+                        // back, along rapier's normal, to the resting slop when it got deeper;
+                        // resting pairs of two dynamic bodies (a stack) are rapier's.
+                        let config = match (&along_normal, config.on_trajectory) {
+                            (_, true) => config,
+                            (Some(c), false)
+                                if c.depth > self.options.resting_slop && !partner_dynamic =>
+                            {
+                                let keep = self.options.resting_slop / c.depth;
+                                let mut c = c.clone();
+                                c.reversing_vector *= 1.0 - keep;
+                                c.touch_pose.translation =
+                                    pose_now.translation + c.reversing_vector;
+                                c.depth -= self.options.resting_slop;
+                                c
+                            }
+                            _ => continue,
+                        };
+                        // (A resting push is already net of its slop.)
                         if !self.options.correct_poses
                             || !config.needs_correction()
-                            || !config.on_trajectory
-                            || (config.state == TouchState::Penetrating && config.depth <= slop)
+                            || (config.on_trajectory
+                                && config.state == TouchState::Penetrating
+                                && config.depth <= slop)
                         {
                             continue;
                         }
                         let r = config.reversing_vector;
+                        // (A translation keeps the current orientation exactly.)
+                        let turned = config.touch_pose.rotation != pose_now.rotation;
                         let n = config.patches.first().map(|p| p.normal);
                         // Split the correction by inverse mass when the partner is dynamic too.
                         let partner_mass = partner_body
@@ -509,9 +597,24 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             _ => 1.0,
                         };
                         if let Some(b) = world.bodies.get_mut(bh) {
-                            let t = b.translation() + r * share;
-                            if t.is_finite() {
-                                b.set_translation(t, true);
+                            if turned {
+                                // A rotating path: the body goes to its pose at first touch
+                                // (its share of the way when the partner moves too).
+                                let rel = co_rel.unwrap_or(Pose::IDENTITY);
+                                let target = config.touch_pose * rel.inverse();
+                                let now = *b.position();
+                                let p = Pose::from_parts(
+                                    now.translation.lerp(target.translation, share),
+                                    now.rotation.slerp(target.rotation, share),
+                                );
+                                if p.is_finite() {
+                                    b.set_position(p, true);
+                                }
+                            } else {
+                                let t = b.translation() + r * share;
+                                if t.is_finite() {
+                                    b.set_translation(t, true);
+                                }
                             }
                             if let Some(n) = n {
                                 // n points out of the partner toward this body: remove the

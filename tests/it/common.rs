@@ -72,3 +72,105 @@ pub fn dirichlet_solve(lap: &nalgebra::DMatrix<f64>, known: &[bool], u: &mut [f6
         u[i] = x[r];
     }
 }
+
+/// Exact first touch walking `moving` back from `now` along `-u` (world unit `u`) over
+/// `[0, len]`: the largest `s` at which a vertex of either mesh meets a triangle of the other
+/// or an edge meets an edge, by brute force over every pair, in `f64`. Written here from the
+/// definition, independently of the crate's search. `None` if the surfaces never meet.
+pub fn reference_first_touch(
+    fixed: &TouchMesh,
+    pf: &Pose,
+    moving: &TouchMesh,
+    now: &Pose,
+    u: Vector,
+    len: f64,
+) -> Option<f64> {
+    use glamx::DVec3;
+    let world = |p: &Pose, v: Vector| -> DVec3 {
+        p.rotation.as_dquat().normalize() * v.as_dvec3() + p.translation.as_dvec3()
+    };
+    let fv: Vec<DVec3> = fixed.vertices().iter().map(|&v| world(pf, v)).collect();
+    let mv: Vec<DVec3> = moving.vertices().iter().map(|&v| world(now, v)).collect();
+    let u = u.as_dvec3().normalize();
+    let scale = fixed.scale().max(moving.scale()) as f64;
+    let eps = 1e-12;
+    let in_range = |s: f64| s >= -1e-9 * scale && s <= len + 1e-9 * scale;
+    // Solve a + x e1 + y e2 = o + s d for (x, y, s) by Cramer's rule.
+    let solve = |o: DVec3, d: DVec3, a: DVec3, e1: DVec3, e2: DVec3| -> Option<(f64, f64, f64)> {
+        // x e1 + y e2 - s d = o - a
+        let det = e1.dot(e2.cross(-d));
+        if det.abs() < 1e-14 * e1.length() * e2.length() {
+            return None;
+        }
+        let r = o - a;
+        let x = r.dot(e2.cross(-d)) / det;
+        let y = e1.dot(r.cross(-d)) / det;
+        let s = e1.dot(e2.cross(r)) / det;
+        Some((x, y, s))
+    };
+    let mut best: Option<f64> = None;
+    let mut take = |s: f64| {
+        if in_range(s) {
+            best = Some(best.map_or(s, |b: f64| b.max(s)));
+        }
+    };
+    let tris = |m: &TouchMesh, v: &[DVec3]| -> Vec<[DVec3; 3]> {
+        m.indices()
+            .iter()
+            .map(|t| t.map(|i| v[i as usize]))
+            .collect()
+    };
+    let (ft, mt) = (tris(fixed, &fv), tris(moving, &mv));
+    // Moving vertex p at p - s u on a fixed triangle.
+    for &p in &mv {
+        for t in &ft {
+            if let Some((x, y, s)) = solve(p, -u, t[0], t[1] - t[0], t[2] - t[0]) {
+                if x >= -eps && y >= -eps && x + y <= 1.0 + eps {
+                    take(s);
+                }
+            }
+        }
+    }
+    // Fixed vertex q on a moving triangle walked back by s: q + s u on the triangle now.
+    for &q in &fv {
+        for t in &mt {
+            if let Some((x, y, s)) = solve(q, u, t[0], t[1] - t[0], t[2] - t[0]) {
+                if x >= -eps && y >= -eps && x + y <= 1.0 + eps {
+                    take(s);
+                }
+            }
+        }
+    }
+    // Moving edge (p0, p1) walked back meets fixed edge (q0, q1):
+    // p0 + x (p1 - p0) - s u = q0 + y (q1 - q0)  <=>  q0 + y f + x (-e) = p0 - s u.
+    let edges = |t: &[[DVec3; 3]]| -> Vec<(DVec3, DVec3)> {
+        t.iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .collect()
+    };
+    let (fe, me) = (edges(&ft), edges(&mt));
+    for &(p0, p1) in &me {
+        for &(q0, q1) in &fe {
+            if let Some((y, x, s)) = solve(p0, -u, q0, q1 - q0, p0 - p1) {
+                if (-eps..=1.0 + eps).contains(&x) && (-eps..=1.0 + eps).contains(&y) {
+                    take(s);
+                }
+            }
+        }
+    }
+    best
+}
+
+/// A mesh scaled by `k` about the origin.
+pub fn scaled_mesh(m: &TouchMesh, k: f32) -> TouchMesh {
+    TouchMesh::new(
+        m.vertices().iter().map(|&v| v * k).collect(),
+        m.indices().to_vec(),
+    )
+    .unwrap()
+}
+
+/// A pose whose translation is scaled by `k`.
+pub fn scaled_pose(p: &Pose, k: f32) -> Pose {
+    Pose::from_parts(p.translation * k, p.rotation)
+}

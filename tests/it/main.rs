@@ -2,8 +2,12 @@
 
 mod common;
 mod coupling;
+mod every_scale;
 mod fig4;
+mod mesh_inputs;
 mod pipeline;
 mod reconstruction_bad_input;
 mod reconstruction_properties;
+mod rigid_motion;
+mod spinning_drop;
 mod surface;

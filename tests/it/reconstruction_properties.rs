@@ -222,24 +222,6 @@ proptest! {
         prop_assert_eq!(s.patches.len(), c.patches.len());
     }
 
-    /// A body that also rotated over the step is walked back at its current orientation and
-    /// still ends touching without penetrating.
-    #[test]
-    fn rotation_over_the_step_still_ends_touching(
-        (a, fixed) in convex(), (b, moving) in convex(), rm in rotation(), spin in rotation(),
-        u in direction(), lateral in vec3(), frac in 0.02f32..0.4,
-    ) {
-        let pose_f = Pose::IDENTITY;
-        let pen = frac * safe_step_length(&fixed, &moving);
-        let Some((prev, now, _)) = approach(&a, &pose_f, &b, rm, u, lateral, pen) else {
-            return Err(TestCaseError::reject("path misses"));
-        };
-        let prev = Pose::from_parts(prev.translation, spin * prev.rotation);
-        let c = Reconstructor::default().reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
-        prop_assert!(c.needs_correction());
-        check_touching(&fixed, &pose_f, &moving, &now, &c, u)?;
-    }
-
     /// With no translation the fallback direction still ends touching.
     #[test]
     fn zero_motion_falls_back_and_ends_touching(

@@ -1,0 +1,306 @@
+//! [`RigidMotion`]: the path a rigid object follows over one step, which the inverse trajectory
+//! mapping walks back along.
+
+use super::contact::{ContactConfiguration, DirectionSource, TouchState};
+use super::reconstruction::Reconstructor;
+use super::touch_mesh::TouchMesh;
+use crate::math::{Pose, Real, Vector};
+use glamx::{DQuat, DVec3};
+
+/// The motion of a rigid object over one step, as rapier integrates a body: the object's
+/// centre of mass `local_center` (in the object's own frame) moves on a straight line from its
+/// place at `start` to its place at `end`, while the orientation turns at a constant angular
+/// velocity about it (the shortest arc: a spherical interpolation of the two rotations).
+///
+/// rapier integrates each substep this way (linear velocity at the centre of mass, angular
+/// velocity about it); over a whole step with several substeps the true path bends slightly
+/// under gravity and contacts, and this motion is the constant-velocity path between the two
+/// poses the step left, the one rapier's own nonlinear CCD assumes too.
+///
+/// # Example
+/// ```
+/// use rapier_touch::prelude::*;
+/// // A body turning 2 rad about its centre of mass (1, 0, 0) while that centre rises by 2.
+/// let com = Vector::new(1.0, 0.0, 0.0);
+/// let start = Pose::IDENTITY;
+/// let turn = Rotation::from_rotation_z(2.0);
+/// let end = Pose::from_parts(Vector::new(1.0, 2.0, 0.0) - turn * com, turn);
+/// let motion = RigidMotion::new(start, end, com);
+/// let half = motion.pose_at(0.5);
+/// // Half-way, the centre of mass is half-way up and the body has turned 1 rad.
+/// assert!((half.transform_point(com) - Vector::new(1.0, 1.0, 0.0)).length() < 1e-5);
+/// assert!(half.rotation.dot(Rotation::from_rotation_z(1.0)).abs() > 1.0 - 1e-6);
+/// // (For exactly half a turn both arcs are equally short: rounding picks one.)
+/// ```
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct RigidMotion {
+    /// The pose at the start of the step (the previous pose).
+    pub start: Pose,
+    /// The pose at the end of the step (the current pose).
+    pub end: Pose,
+    /// The point the rotation turns about, in the object's frame: its centre of mass.
+    pub local_center: Vector,
+}
+
+impl RigidMotion {
+    /// The motion from `start` to `end` turning about `local_center` (object frame).
+    pub fn new(start: Pose, end: Pose, local_center: Vector) -> Self {
+        Self {
+            start,
+            end,
+            local_center,
+        }
+    }
+
+    /// The pose at time `t` (`0` = start, `1` = end).
+    pub fn pose_at(&self, t: Real) -> Pose {
+        let (q, p) = self.dpose_at(t as f64);
+        Pose::from_parts(p.as_vec3(), q.as_quat())
+    }
+
+    /// The angle the object turns through over the step (radians, in `[0, π]`).
+    pub fn angle(&self) -> Real {
+        let (q0, q1) = self.rotations();
+        q0.angle_between(q1) as Real
+    }
+
+    /// `true` when every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.start.is_finite() && self.end.is_finite() && self.local_center.is_finite()
+    }
+
+    fn rotations(&self) -> (DQuat, DQuat) {
+        (
+            self.start.rotation.as_dquat().normalize(),
+            self.end.rotation.as_dquat().normalize(),
+        )
+    }
+
+    /// The pose at time `t`, in `f64`: (rotation, translation).
+    pub(crate) fn dpose_at(&self, t: f64) -> (DQuat, DVec3) {
+        let (q0, q1) = self.rotations();
+        let lc = self.local_center.as_dvec3();
+        let c0 = q0 * lc + self.start.translation.as_dvec3();
+        let c1 = q1 * lc + self.end.translation.as_dvec3();
+        // glam's slerp takes the shortest arc (it flips `q1` when the dot product is negative).
+        let q = if t <= 0.0 {
+            q0
+        } else if t >= 1.0 {
+            q1
+        } else {
+            q0.slerp(q1, t).normalize()
+        };
+        let c = c0 + (c1 - c0) * t;
+        (q, c - q * lc)
+    }
+
+    /// The largest distance any point within `radius` of the centre of mass travels over the
+    /// step: the centre's displacement plus the arc of the rotation.
+    pub(crate) fn max_travel(&self, radius: f64) -> f64 {
+        let (q0, q1) = self.rotations();
+        let lc = self.local_center.as_dvec3();
+        let c0 = q0 * lc + self.start.translation.as_dvec3();
+        let c1 = q1 * lc + self.end.translation.as_dvec3();
+        c0.distance(c1) + q0.angle_between(q1) * radius
+    }
+}
+
+/// The largest distance from `center` (mesh frame) to a point of `mesh`: a bound through the
+/// corners of its bounding box.
+pub(super) fn bounding_radius(mesh: &TouchMesh, center: Vector) -> f64 {
+    let b = mesh.local_aabb();
+    let c = center.as_dvec3();
+    let (lo, hi) = (b.mins.as_dvec3() - c, b.maxs.as_dvec3() - c);
+    lo.abs().max(hi.abs()).length()
+}
+
+impl Reconstructor {
+    /// First touch along a path that turns (see [`Reconstructor::reconstruct_motion`]).
+    ///
+    /// `tau` runs backward along the path: `0` is the current pose, `1` the previous one.
+    /// 1. A step that started penetrating has no first touch on its path: the translation
+    ///    method at the current orientation gives the nearest way out (`on_trajectory` false).
+    /// 2. The path is sampled forward in time with spacing below half the larger of the two
+    ///    objects' smallest extents, so that neither can pass through the other between two
+    ///    samples; the first penetrating sample brackets the first touch.
+    /// 3. Bisection on "penetrating" (transversal crossing or containment, `f64`) narrows the
+    ///    bracket until the rotation over it moves no point by more than the tolerance.
+    /// 4. Over that sub-step the motion is a translation to within the tolerance: the paper's
+    ///    exact method (eq. 1-3) finds the touching features and the touch pose.
+    pub(super) fn rotate_back(
+        &mut self,
+        fixed: &TouchMesh,
+        pos_fixed: &Pose,
+        moving: &TouchMesh,
+        motion: &RigidMotion,
+        tol: f64,
+        radius: f64,
+    ) -> ContactConfiguration {
+        let now = motion.end;
+        let back = |tau: f64| motion.pose_at((1.0 - tau) as Real);
+        let angle = motion.angle() as f64;
+        let travel = motion.max_travel(radius);
+        // Direction of travel: the centre of mass's, or toward the fixed object when it only
+        // spins.
+        let (qf, tf) = (
+            pos_fixed.rotation.as_dquat(),
+            pos_fixed.translation.as_dvec3(),
+        );
+        let lc = motion.local_center.as_dvec3();
+        let centre = |t: f64| {
+            let (q, p) = motion.dpose_at(t);
+            q * lc + p
+        };
+        let u_world = (centre(1.0) - centre(0.0))
+            .try_normalize()
+            .or_else(|| {
+                let cf = qf * fixed.local_aabb().center().as_dvec3() + tf;
+                (cf - centre(1.0)).try_normalize()
+            })
+            .unwrap_or(DVec3::NEG_Y);
+        let separated = ContactConfiguration {
+            state: TouchState::Separated,
+            reversing_vector: Vector::ZERO,
+            depth: 0.0,
+            direction: u_world.as_vec3(),
+            direction_source: DirectionSource::Trajectory,
+            on_trajectory: true,
+            time_of_impact: None,
+            touch_pose: now,
+            patches: Vec::new(),
+            candidate_pairs: 0,
+        };
+
+        // Quick reject: the swept bounding sphere misses the fixed object's box.
+        let inv_f = qf.conjugate();
+        let (a, b) = (inv_f * (centre(0.0) - tf), inv_f * (centre(1.0) - tf));
+        let fb = fixed.local_aabb();
+        let pad = DVec3::splat(radius + 4.0 * tol);
+        if (a.min(b) - pad).cmpgt(fb.maxs.as_dvec3()).any()
+            || (a.max(b) + pad).cmplt(fb.mins.as_dvec3()).any()
+        {
+            return separated;
+        }
+
+        let pen = |this: &mut Self, tau: f64| {
+            let fr = this.frame_at(fixed, pos_fixed, moving, &back(tau), u_world, tol);
+            this.penetrating_at(fixed, moving, &fr, 0.0)
+        };
+        if pen(self, 1.0) {
+            // Already penetrating when the step began: not a first touch of this step.
+            let mut c = self
+                .translate_back(fixed, pos_fixed, moving, &now, &motion.start)
+                .unwrap_or(separated);
+            c.on_trajectory = false;
+            c.time_of_impact = None;
+            return c;
+        }
+        // Sample spacing: half the larger smallest extent (a flat object has none).
+        let h = 0.5
+            * (fixed.min_extent().max(moving.min_extent()) as f64)
+                .max(0.5 * fixed.scale().min(moving.scale()) as f64);
+        let budget = 4 * self.options.max_perforation_samples.max(1);
+        let k = ((travel / h).ceil() as usize).clamp(1, budget);
+        let mut tau_b = 1.0;
+        let mut tau_a = None;
+        for i in 1..=k {
+            let tau = 1.0 - i as f64 / k as f64;
+            if pen(self, tau) {
+                tau_a = Some(tau);
+                break;
+            }
+            tau_b = tau;
+        }
+        let Some(mut tau_a) = tau_a else {
+            // Not penetrating at any sample, now included: touching or apart now, decided by
+            // the translation method over the last sub-step.
+            let c = self
+                .translate_back(fixed, pos_fixed, moving, &now, &back(1.0 / k as f64))
+                .unwrap_or(separated.clone());
+            return match c.state {
+                TouchState::Touching => ContactConfiguration {
+                    time_of_impact: Some(1.0),
+                    ..c
+                },
+                _ => separated,
+            };
+        };
+        let penetrating_now = tau_a == 0.0 || pen(self, 0.0);
+        // Bisection until the rotation over the bracket is below the tolerance.
+        let mut iters = 0;
+        while (tau_b - tau_a) * angle * radius > tol && iters < 64 {
+            let mid = 0.5 * (tau_a + tau_b);
+            if pen(self, mid) {
+                tau_a = mid;
+            } else {
+                tau_b = mid;
+            }
+            iters += 1;
+        }
+        let (mut pa, mut pb) = (back(tau_a), back(tau_b));
+        let mut sub = self
+            .translate_back(fixed, pos_fixed, moving, &pa, &pb)
+            .unwrap_or(separated.clone());
+        if sub.needs_correction() && !sub.on_trajectory {
+            // The sub-step's start already overlaps by a rounding of the predicate (its way
+            // out would leave the path): bisect on, until the whole motion over the bracket is
+            // below the tolerance, and try again.
+            while (tau_b - tau_a) * travel > tol && iters < 128 {
+                let mid = 0.5 * (tau_a + tau_b);
+                if pen(self, mid) {
+                    tau_a = mid;
+                } else {
+                    tau_b = mid;
+                }
+                iters += 1;
+            }
+            (pa, pb) = (back(tau_a), back(tau_b));
+            sub = self
+                .translate_back(fixed, pos_fixed, moving, &pa, &pb)
+                .unwrap_or(separated.clone());
+        }
+        let (touch, t_sub) = if sub.needs_correction() && sub.on_trajectory {
+            // Where on the path: the sub-step's own time of impact (0 = pb, 1 = pa).
+            (sub.touch_pose, sub.time_of_impact.unwrap_or(1.0) as f64)
+        } else if !sub.needs_correction() {
+            (pa, 1.0)
+        } else {
+            // `pb` is within the tolerance of first touch: the touching features there, from
+            // a zero-length query.
+            sub = self
+                .translate_back(fixed, pos_fixed, moving, &pb, &pb)
+                .unwrap_or(separated.clone());
+            (pb, 0.0)
+        };
+        let tau_star = tau_b - t_sub * (tau_b - tau_a);
+        // Depth: how far the touching material points travelled past first touch.
+        let to_now = now * touch.inverse();
+        let depth = sub
+            .patches
+            .iter()
+            .flat_map(|p| p.points.iter())
+            .map(|p| (to_now.transform_point(p.point) - p.point).length())
+            .fold(0.0, Real::max);
+        let reversing_vector = touch.translation - now.translation;
+        ContactConfiguration {
+            state: if penetrating_now {
+                TouchState::Penetrating
+            } else {
+                TouchState::Perforated
+            },
+            reversing_vector,
+            depth: if sub.patches.is_empty() {
+                reversing_vector.length()
+            } else {
+                depth
+            },
+            direction: sub.direction,
+            direction_source: DirectionSource::Trajectory,
+            on_trajectory: true,
+            time_of_impact: Some((1.0 - tau_star).clamp(0.0, 1.0) as Real),
+            touch_pose: touch,
+            patches: sub.patches,
+            candidate_pairs: sub.candidate_pairs,
+        }
+    }
+}

@@ -1,0 +1,111 @@
+//! First touch along a rotating path: random convex pairs at scales from 1e-4 m to 1e4 m follow
+//! random rigid motions (translation and up to 2.5 rad of rotation about a random centre).
+//! parry's own contact query, on the scene brought back to unit scale, finds the reported touch
+//! pose touching and not penetrating (distance >= -1e-5 of the scale), and no earlier pose of
+//! the path penetrating; the touch pose lies on the path at the reported time of impact.
+
+use crate::common::scaled_mesh;
+use parry3d::query;
+use proptest::prelude::*;
+use rapier_touch::prelude::*;
+
+fn vec3() -> impl Strategy<Value = Vector> {
+    (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0).prop_map(|(x, y, z)| Vector::new(x, y, z))
+}
+
+fn rotation() -> impl Strategy<Value = Rotation> {
+    (vec3(), 0.0f32..std::f32::consts::PI).prop_map(|(axis, angle)| {
+        Rotation::from_axis_angle(axis.try_normalize().unwrap_or(Vector::X), angle)
+    })
+}
+
+fn direction() -> impl Strategy<Value = Vector> {
+    vec3().prop_filter_map("non-zero", |v| v.try_normalize())
+}
+
+/// A random convex polyhedron (parry's shape stays at unit scale, where its f32 tolerances are
+/// small; the crate sees its touch mesh scaled).
+fn convex() -> impl Strategy<Value = (ConvexPolyhedron, Vec<Vector>)> {
+    prop::collection::vec(vec3(), 8..16).prop_filter_map("non-degenerate hull", |pts| {
+        let c = ConvexPolyhedron::from_convex_hull(&pts)?;
+        let e = parry3d::shape::Shape::compute_local_aabb(&c).extents();
+        (e.min_element() > 0.3).then_some((c, pts))
+    })
+}
+
+/// The touch mesh of parry's shape (the exact hull of its points), scaled by `k`.
+fn touch_mesh(c: &ConvexPolyhedron, k: f32) -> TouchMesh {
+    scaled_mesh(&TouchMesh::from_shape(c).unwrap(), k)
+}
+
+fn unscaled(p: &Pose, k: f32) -> Pose {
+    Pose::from_parts(p.translation / k, p.rotation)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+    #[test]
+    fn rotating_paths_stop_at_first_touch_at_every_scale(
+        (a, _) in convex(), (b, _) in convex(), rf in rotation(), rm in rotation(),
+        u in direction(), lateral in vec3(), axis in direction(), angle in 0.2f32..2.5,
+        center in vec3(), len in 2.5f32..4.5, exp in -4.0f64..4.0,
+    ) {
+        let k = 10f64.powf(exp) as f32;
+        let pose_f = Pose::from_parts(Vector::new(0.3, -0.2, 0.1), rf);
+        let start = Pose::from_parts(pose_f.translation - 3.0 * u + lateral.reject_from(u) * 0.4, rm);
+        let end = Pose::from_parts(
+            start.translation + len * u,
+            Rotation::from_axis_angle(axis, angle) * rm,
+        );
+        let center = center * 0.3;
+        let unit_motion = RigidMotion::new(start, end, center);
+        if query::contact(&pose_f, &a, &start, &b, 0.0).ok().flatten().is_some_and(|c| c.dist <= 1e-3) {
+            return Err(TestCaseError::reject("starts in contact"));
+        }
+        let (fixed, moving) = (touch_mesh(&a, k), touch_mesh(&b, k));
+        let motion = RigidMotion::new(
+            Pose::from_parts(start.translation * k, start.rotation),
+            Pose::from_parts(end.translation * k, end.rotation),
+            center * k,
+        );
+        let pf = Pose::from_parts(pose_f.translation * k, pose_f.rotation);
+        let c = Reconstructor::default().reconstruct_motion(&fixed, &pf, &moving, &motion).unwrap();
+        // parry, at unit scale.
+        let dist = |p: &Pose| -> f32 {
+            query::contact(&pose_f, &a, p, &b, 1.0).ok().flatten().map_or(1.0, |c| c.dist)
+        };
+        let end_dist = dist(&end);
+        if end_dist.abs() < 1e-4 {
+            return Err(TestCaseError::reject("grazing at the end pose"));
+        }
+        match c.state {
+            TouchState::Separated | TouchState::Touching => {
+                prop_assert!(end_dist >= -1e-5, "{:?} but parry finds {end_dist} at the end", c.state);
+            }
+            TouchState::Penetrating | TouchState::Perforated => {
+                prop_assert!(c.on_trajectory);
+                if c.state == TouchState::Penetrating {
+                    prop_assert!(end_dist < 0.0, "penetrating, but parry finds {end_dist}");
+                } else {
+                    prop_assert!(end_dist > 0.0, "perforated, but parry finds {end_dist}");
+                }
+                let touch = unscaled(&c.touch_pose, k);
+                let d = dist(&touch);
+                prop_assert!(d >= -1e-5, "touch pose penetrates: parry distance {d} (scale {k})");
+                prop_assert!(d <= 1e-4, "touch pose apart: parry distance {d} (scale {k}): {c:?}");
+                // On the path, at the time of impact.
+                let toi = c.time_of_impact.expect("a time of impact on the path");
+                let on_path = unit_motion.pose_at(toi);
+                prop_assert!((on_path.translation - touch.translation).length() <= 1e-4);
+                prop_assert!(on_path.rotation.dot(touch.rotation).abs() >= 1.0 - 1e-6);
+                // No earlier pose of the path penetrates.
+                for i in 0..48 {
+                    let t = toi * i as f32 / 48.0;
+                    let d = dist(&unit_motion.pose_at(t));
+                    prop_assert!(d >= -1e-5, "at t = {t} < toi = {toi} parry finds {d}");
+                }
+            }
+        }
+    }
+}
