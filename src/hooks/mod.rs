@@ -16,6 +16,7 @@
 //! - Sleeping bodies are not guarded (they do not move); a collider whose shape has no
 //!   triangle-mesh form (height fields, compounds, voxels) is left to rapier.
 
+mod pair_filter;
 mod report;
 mod touch_hooks;
 mod touch_pipeline;

@@ -1,6 +1,7 @@
 //! [`TouchPipeline`]: one call that steps a rapier `PhysicsWorld` with the touch hooks, the
 //! step guard, the tools' proxies and the contact report.
 
+use super::pair_filter::rapier_solves_pair;
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
     body_motion, pair_configuration, previous_collider_pose, CachedMesh, TouchHooks,
@@ -79,7 +80,12 @@ struct Tool {
 ///    through a thin object (perforation), is moved back along its own trajectory to first touch
 ///    and loses its velocity into the surface. This *clamps the motion to first touch*, so fast
 ///    objects do not tunnel even with rapier's CCD off, and moving TriMesh bodies (which
-///    rapier's CCD never sweeps) are guarded too;
+///    rapier's CCD never sweeps) are guarded too. Only pairs rapier itself would solve are
+///    corrected: a body passes sensors, colliders its collision or solver groups exclude,
+///    disabled colliders, pairs its `ActiveCollisionTypes` leave out and pairs your
+///    `filter_contact_pair` refuses, exactly as in vanilla rapier (tools ignore the collision
+///    types only). The colliders of moved bodies and their broad-phase boxes are synced at
+///    once, so collider poses and the query pipeline see the corrected poses after the step;
 /// 4. **tools:** a kinematic body registered with [`TouchPipeline::set_tool_target`] is put at
 ///    the last pose that does not penetrate (its proxy), and
 ///    [`TouchPipeline::tool_feedback`] gives the device-to-proxy offset for a feedback force;
@@ -368,6 +374,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
 
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::new();
+        let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
         for pass in 0..passes {
             let mut moved = false;
             let movers: Vec<RigidBodyHandle> = world
@@ -437,6 +444,23 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             continue;
                         };
                         if ph == ch || partner.parent() == Some(bh) {
+                            continue;
+                        }
+                        // Only pairs rapier itself would solve (sensors, groups, disabled
+                        // colliders, collision types and the user's pair filter are rapier's
+                        // say), asked in rapier's own pair order when it has the pair.
+                        let (a, b) = world
+                            .narrow_phase
+                            .contact_pair(ph, ch)
+                            .map_or((ph, ch), |p| (p.collider1, p.collider2));
+                        if !rapier_solves_pair(
+                            &world.bodies,
+                            &world.colliders,
+                            &self.hooks.inner,
+                            a,
+                            b,
+                            is_tool,
+                        ) {
                             continue;
                         }
                         let Some(partner_mesh) = self.hooks.meshes.get(&ph).map(|m| m.mesh.clone())
@@ -626,7 +650,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 }
                             }
                         }
+                        moved_bodies.push(bh);
                         if let (Some(pb), true) = (partner_body, share < 1.0) {
+                            moved_bodies.push(pb);
                             if let Some(b) = world.bodies.get_mut(pb) {
                                 let t = b.translation() - r * (1.0 - share);
                                 if t.is_finite() {
@@ -650,6 +676,37 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             }
             if !moved {
                 break;
+            }
+        }
+        sync_moved_colliders(world, &mut moved_bodies);
+    }
+}
+
+/// Puts the colliders of the bodies the guard moved where their bodies now are, and their
+/// broad-phase boxes with them, so renderers, ray casts and the query pipeline see the
+/// corrected poses right after the step (rapier would only sync them at the next step).
+fn sync_moved_colliders(world: &mut PhysicsWorld, moved: &mut Vec<RigidBodyHandle>) {
+    if moved.is_empty() {
+        return;
+    }
+    world
+        .bodies
+        .propagate_modified_body_positions_to_colliders(&mut world.colliders);
+    moved.sort_unstable_by_key(|h| h.into_raw_parts());
+    moved.dedup();
+    let params = world.integration_parameters;
+    for h in moved.iter() {
+        let Some(body) = world.bodies.get(*h) else {
+            continue;
+        };
+        for ch in body.colliders() {
+            if let Some(co) = world.colliders.get(*ch) {
+                if co.is_enabled() {
+                    let aabb = co.compute_broad_phase_aabb(&params, &world.bodies);
+                    if aabb.mins.is_finite() && aabb.maxs.is_finite() {
+                        world.broad_phase.set_aabb(&params, *ch, aabb);
+                    }
+                }
             }
         }
     }

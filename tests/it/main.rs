@@ -6,6 +6,7 @@ mod every_scale;
 mod fig4;
 mod mesh_inputs;
 mod pipeline;
+mod rapier_semantics;
 mod reconstruction_bad_input;
 mod reconstruction_properties;
 mod rigid_motion;

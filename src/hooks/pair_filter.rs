@@ -1,0 +1,75 @@
+//! Whether rapier would solve contacts between two colliders: the guard corrects only such
+//! pairs, so a body passes through whatever rapier lets it pass (sensors, excluded collision or
+//! solver groups, disabled colliders and bodies, `ActiveCollisionTypes`, the user's
+//! `filter_contact_pair`).
+//!
+//! rapier 0.36 decides this in its narrow phase (`geometry/narrow_phase/pair_update.rs`,
+//! `process_pair`) with no public entry point, and a pair the step guard meets may not be in
+//! the narrow phase at all (a body that tunneled past it within the step). The rules are
+//! therefore applied here in rapier's own order, on rapier's own flags, and the user's
+//! filtering hook is asked exactly as rapier asks it.
+
+use rapier3d::dynamics::{RigidBodySet, RigidBodyType};
+use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
+use rapier3d::pipeline::{ActiveHooks, PairFilterContext, PhysicsHooks};
+
+/// `true` if rapier would compute and solve rigid contacts between `c1` and `c2` (the user's
+/// `hooks` asked for pairs with `ActiveHooks::FILTER_CONTACT_PAIRS`). With `tool`, the
+/// `ActiveCollisionTypes` rule is skipped: a tool is a kinematic body the crate stops at first
+/// touch itself (its proxy), also against fixed colliders, which rapier's default collision
+/// types leave out. Not covered: the multibody self-contact and joint rules (two links of one
+/// multibody are treated as solved).
+pub(crate) fn rapier_solves_pair(
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    hooks: &dyn PhysicsHooks,
+    c1: ColliderHandle,
+    c2: ColliderHandle,
+    tool: bool,
+) -> bool {
+    let (Some(co1), Some(co2)) = (colliders.get(c1), colliders.get(c2)) else {
+        return false;
+    };
+    // Disabled colliders (a disabled body disables its colliders) are not in the broad phase;
+    // sensors get intersections, never contacts.
+    if !co1.is_enabled() || !co2.is_enabled() || co1.is_sensor() || co2.is_sensor() {
+        return false;
+    }
+    let (rb1, rb2) = (co1.parent(), co2.parent());
+    if rb1.is_some() && rb1 == rb2 {
+        return false;
+    }
+    let body_type = |h: Option<_>| {
+        h.and_then(|h| bodies.get(h))
+            .map_or(RigidBodyType::Fixed, |b| b.body_type())
+    };
+    let (t1, t2) = (body_type(rb1), body_type(rb2));
+    if !tool
+        && !co1.active_collision_types().test(t1, t2)
+        && !co2.active_collision_types().test(t1, t2)
+    {
+        return false;
+    }
+    if !co1.collision_groups().test(co2.collision_groups()) {
+        return false;
+    }
+    let active = co1.active_hooks() | co2.active_hooks();
+    let flags = if active.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
+        let context = PairFilterContext {
+            bodies,
+            colliders,
+            collider1: c1,
+            collider2: c2,
+            rigid_body1: rb1,
+            rigid_body2: rb2,
+        };
+        match hooks.filter_contact_pair(&context) {
+            Some(flags) => flags,
+            None => return false,
+        }
+    } else {
+        SolverFlags::default()
+    };
+    flags.contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+        && co1.solver_groups().test(co2.solver_groups())
+}

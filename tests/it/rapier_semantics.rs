@@ -1,0 +1,247 @@
+//! rapier's collision semantics hold through the touch pipeline (issue 12): a body dropped
+//! slowly (2 m/s) and shot fast (60 m/s) at a floor that rapier lets it pass (a sensor, collision
+//! groups that exclude the pair, solver groups that exclude it, a disabled collider, the user's
+//! `filter_contact_pair` returning `None`, `ActiveCollisionTypes` that exclude dynamic-fixed
+//! pairs) ends exactly where vanilla rapier puts it, below the floor, in both opt-in modes (hook
+//! flags and `track_collider`); the plain floor stops it; and after a corrected step, collider
+//! poses and a query-pipeline ray cast see the corrected pose.
+
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+
+/// The user's hooks: refuse every pair (a floor the game lets bodies through).
+struct RefuseAll;
+
+impl PhysicsHooks for RefuseAll {
+    fn filter_contact_pair(&self, _: &PairFilterContext) -> Option<SolverFlags> {
+        None
+    }
+}
+
+#[derive(Copy, Clone, Debug)]
+enum Semantic {
+    Sensor,
+    CollisionGroups,
+    SolverGroups,
+    DisabledCollider,
+    UserFilter,
+    CollisionTypes,
+}
+
+fn setup(
+    semantic: Semantic,
+    speed: f32,
+    hook_flags: bool,
+) -> (PhysicsWorld, RigidBodyHandle, [ColliderHandle; 2]) {
+    let mut w = PhysicsWorld::default();
+    TouchPipeline::configure(&mut w.integration_parameters);
+    let mut hooks = if hook_flags {
+        ActiveHooks::MODIFY_SOLVER_CONTACTS
+    } else {
+        ActiveHooks::empty()
+    };
+    if matches!(semantic, Semantic::UserFilter) {
+        hooks |= ActiveHooks::FILTER_CONTACT_PAIRS;
+    }
+    let mut floor = ColliderBuilder::cuboid(5.0, 0.05, 5.0).active_hooks(hooks);
+    let mut body = ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(hooks);
+    let (g1, g2) = (
+        InteractionGroups::new(Group::GROUP_1, Group::GROUP_1, InteractionTestMode::And),
+        InteractionGroups::new(Group::GROUP_2, Group::GROUP_2, InteractionTestMode::And),
+    );
+    match semantic {
+        Semantic::Sensor => floor = floor.sensor(true),
+        Semantic::CollisionGroups => {
+            floor = floor.collision_groups(g1);
+            body = body.collision_groups(g2);
+        }
+        Semantic::SolverGroups => {
+            floor = floor.solver_groups(g1);
+            body = body.solver_groups(g2);
+        }
+        Semantic::DisabledCollider => floor = floor.enabled(false),
+        Semantic::UserFilter => {}
+        Semantic::CollisionTypes => {
+            let none = ActiveCollisionTypes::empty();
+            floor = floor.active_collision_types(none);
+            body = body.active_collision_types(none);
+        }
+    }
+    let fh = w.insert_collider(floor, None);
+    let b = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 1.0, 0.0))
+            .linvel(Vector::new(0.0, -speed, 0.0)),
+    );
+    let bh = w.insert_collider(body, Some(b));
+    (w, b, [fh, bh])
+}
+
+fn final_y(semantic: Semantic, speed: f32, mode: Option<bool>) -> f32 {
+    let hook_flags = mode.unwrap_or(true);
+    let (mut w, b, handles) = setup(semantic, speed, hook_flags);
+    let filter = matches!(semantic, Semantic::UserFilter);
+    match mode {
+        None => {
+            for _ in 0..40 {
+                if filter {
+                    w.step_with_events(&RefuseAll, &());
+                } else {
+                    w.step();
+                }
+            }
+        }
+        Some(hook_flags) => {
+            let mut touch = TouchPipeline::new(RefuseAllIf(filter));
+            if !hook_flags {
+                handles.iter().for_each(|h| touch.track_collider(*h));
+            }
+            for _ in 0..40 {
+                touch.step(&mut w);
+            }
+        }
+    }
+    w.bodies[b].translation().y
+}
+
+/// `RefuseAll` when `.0`, no hooks otherwise.
+struct RefuseAllIf(bool);
+
+impl PhysicsHooks for RefuseAllIf {
+    fn filter_contact_pair(&self, c: &PairFilterContext) -> Option<SolverFlags> {
+        if self.0 {
+            RefuseAll.filter_contact_pair(c)
+        } else {
+            Some(SolverFlags::default())
+        }
+    }
+}
+
+#[test]
+fn bodies_pass_whatever_rapier_lets_them_pass() {
+    let mut failures = Vec::new();
+    for semantic in [
+        Semantic::Sensor,
+        Semantic::CollisionGroups,
+        Semantic::SolverGroups,
+        Semantic::DisabledCollider,
+        Semantic::UserFilter,
+        Semantic::CollisionTypes,
+    ] {
+        for speed in [2.0, 60.0] {
+            let vanilla = final_y(semantic, speed, None);
+            assert!(
+                vanilla < -1.0,
+                "{semantic:?} {speed}: vanilla rapier stops the body at {vanilla}"
+            );
+            for hook_flags in [true, false] {
+                let ours = final_y(semantic, speed, Some(hook_flags));
+                if (ours - vanilla).abs() > 1e-5 {
+                    failures.push(format!(
+                        "{semantic:?} {speed} m/s hooks {hook_flags}: y {ours} vs vanilla {vanilla}"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A 60 m/s box 1 m above a plain 10 cm floor slab (top at `y = 0.05 + floor_y`), rapier's CCD
+/// off, stepped by the touch pipeline in one opt-in mode; the box's collider sits `offset`
+/// above its body's origin. Returns the world, the body, its collider and the pipeline.
+fn plain_drop(
+    hook_flags: bool,
+    floor_y: f32,
+    offset: f32,
+) -> (PhysicsWorld, RigidBodyHandle, ColliderHandle, TouchPipeline) {
+    let mut w = PhysicsWorld::default();
+    TouchPipeline::configure(&mut w.integration_parameters);
+    w.integration_parameters.max_ccd_substeps = 0;
+    let flags = if hook_flags {
+        ActiveHooks::MODIFY_SOLVER_CONTACTS
+    } else {
+        ActiveHooks::empty()
+    };
+    let fh = w.insert_collider(
+        ColliderBuilder::cuboid(5.0, 0.05, 5.0)
+            .translation(Vector::new(0.0, floor_y, 0.0))
+            .active_hooks(flags),
+        None,
+    );
+    let b = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 1.0, 0.0))
+            .linvel(Vector::new(0.0, -60.0, 0.0)),
+    );
+    let bh = w.insert_collider(
+        ColliderBuilder::cuboid(0.25, 0.25, 0.25)
+            .translation(Vector::new(0.0, offset, 0.0))
+            .active_hooks(flags),
+        Some(b),
+    );
+    let mut touch = TouchPipeline::default();
+    if !hook_flags {
+        touch.track_collider(fh);
+        touch.track_collider(bh);
+    }
+    (w, b, bh, touch)
+}
+
+/// The control: the same floor without any of those settings stops the body in both modes.
+#[test]
+fn the_plain_floor_stops_the_body() {
+    for hook_flags in [true, false] {
+        let (mut w, b, _, mut touch) = plain_drop(hook_flags, 0.0, 0.0);
+        for _ in 0..40 {
+            touch.step(&mut w);
+        }
+        assert!(
+            w.bodies[b].translation().y > 0.25,
+            "hooks {hook_flags}: {}",
+            w.bodies[b].translation().y
+        );
+    }
+}
+
+/// Poses in sync (issue 12): right after a step in which the guard moved a body back, its
+/// collider's pose and a query-pipeline ray cast see the corrected pose, not the pose rapier's
+/// step left.
+#[test]
+fn collider_poses_and_ray_casts_see_the_corrected_pose() {
+    for hook_flags in [true, false] {
+        // The collider sits 0.1 m above the body's origin: its pose is the body's times that.
+        let (mut w, b, bh, mut touch) = plain_drop(hook_flags, -0.05, 0.1);
+        let mut corrected = false;
+        for _ in 0..10 {
+            touch.step(&mut w);
+            if touch.corrections() == 0 {
+                continue;
+            }
+            corrected = true;
+            let body = *w.bodies[b].position();
+            let expected = body * Pose::from_translation(Vector::new(0.0, 0.1, 0.0));
+            let co = *w.colliders[bh].position();
+            assert!(
+                (co.translation - expected.translation).length() < 1e-5,
+                "collider at {:?}, body says {:?}",
+                co.translation,
+                expected.translation
+            );
+            // A ray straight down from 5 m hits the box's top face where the body now is.
+            let ray = Ray::new(Vector::new(0.0, 5.0, 0.0), Vector::new(0.0, -1.0, 0.0));
+            let (hit, toi) = w
+                .query_pipeline()
+                .cast_ray(&ray, 10.0, true)
+                .expect("the ray hits the box");
+            assert_eq!(hit, bh);
+            let top = co.translation.y + 0.25;
+            assert!(
+                (5.0 - toi - top).abs() < 1e-4,
+                "ray hits at {} but the top is at {top}",
+                5.0 - toi
+            );
+        }
+        assert!(corrected, "the guard never corrected the 60 m/s box");
+    }
+}
