@@ -1,6 +1,9 @@
-//! Vanilla rapier (CCD off) against rapier with `rapier_touch`, in one process: a 0.5 m box
-//! dropped at 1, 5, 20, 50 and 100 m/s onto a fixed cuboid and onto a zero-thickness TriMesh
-//! floor, dt = 1/60, 180 steps.
+//! rapier against rapier with `rapier_touch`, in one process: a 0.5 m box dropped at 1, 5, 20,
+//! 50 and 100 m/s onto a fixed cuboid and onto a zero-thickness TriMesh floor, dt = 1/60, 180
+//! steps. Three sides: `rapier_ccd` is rapier as users run it (its default integration
+//! parameters: CCD on, `max_ccd_substeps = 1`, fast bodies swept against fixed colliders),
+//! `rapier` is the same with CCD off (`max_ccd_substeps = 0`), `touch` is the touch pipeline
+//! (rapier's CCD off: the guard alone). Contact clustering is off on every side.
 //!
 //! Prints a table; with `--csv`, the same rows as CSV with the header
 //! `side,scene,speed_mps,tunneled,max_penetration_m,resting_penetration_m,steps_to_rest,ms_per_step`.
@@ -11,7 +14,7 @@
 //!
 //! Run with `cargo run --release --example penetration_compare [-- --csv]`.
 
-use rapier_touch::scenes::{run_drop, DropFloor};
+use rapier_touch::scenes::{run_drop_side, DropFloor, DropSide};
 
 const STEPS: usize = 180;
 
@@ -26,10 +29,14 @@ struct Row {
     ms_per_step: f64,
 }
 
-fn run(speed: f32, floor: DropFloor, with_crate: bool) -> Row {
-    let r = run_drop(speed, floor, with_crate, STEPS);
+fn run(speed: f32, floor: DropFloor, side: DropSide) -> Row {
+    let r = run_drop_side(speed, floor, side, STEPS);
     Row {
-        side: if with_crate { "touch" } else { "rapier" },
+        side: match side {
+            DropSide::Rapier => "rapier",
+            DropSide::RapierDefaults => "rapier_ccd",
+            DropSide::Touch => "touch",
+        },
         scene: match floor {
             DropFloor::Cuboid => "cuboid",
             DropFloor::ThinTriMesh => "thin_trimesh",
@@ -48,8 +55,8 @@ fn main() {
     let mut rows = Vec::new();
     for floor in [DropFloor::Cuboid, DropFloor::ThinTriMesh] {
         for speed in [1.0, 5.0, 20.0, 50.0, 100.0] {
-            for with_crate in [false, true] {
-                rows.push(run(speed, floor, with_crate));
+            for side in [DropSide::RapierDefaults, DropSide::Rapier, DropSide::Touch] {
+                rows.push(run(speed, floor, side));
             }
         }
     }
@@ -70,7 +77,7 @@ fn main() {
         }
     } else {
         println!(
-            "{:<7} {:<13} {:>9} {:>9} {:>16} {:>16} {:>14} {:>11}",
+            "{:<10} {:<13} {:>9} {:>9} {:>16} {:>16} {:>14} {:>11}",
             "side",
             "scene",
             "speed m/s",
@@ -82,7 +89,7 @@ fn main() {
         );
         for r in &rows {
             println!(
-                "{:<7} {:<13} {:>9} {:>9} {:>16.6} {:>16.6} {:>14} {:>11.4}",
+                "{:<10} {:<13} {:>9} {:>9} {:>16.6} {:>16.6} {:>14} {:>11.4}",
                 r.side,
                 r.scene,
                 r.speed,

@@ -575,7 +575,35 @@ impl DropRun {
 /// assert!(touch.max_penetration < 1e-3);
 /// ```
 pub fn run_drop(speed: Real, floor: DropFloor, with_crate: bool, steps: usize) -> DropRun {
+    let side = if with_crate {
+        DropSide::Touch
+    } else {
+        DropSide::Rapier
+    };
+    run_drop_side(speed, floor, side, steps)
+}
+
+/// Who steps a [`run_drop_side`] world.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum DropSide {
+    /// `PhysicsWorld::step`, rapier's CCD off (`max_ccd_substeps = 0`).
+    Rapier,
+    /// `PhysicsWorld::step` with rapier's default integration parameters: its CCD on
+    /// (`max_ccd_substeps = 1`: fast bodies are swept against fixed colliders).
+    RapierDefaults,
+    /// [`TouchPipeline::step`](crate::hooks::TouchPipeline::step), rapier's CCD off.
+    Touch,
+}
+
+/// [`run_drop`] with the side named: rapier with its CCD off, rapier with its defaults (CCD
+/// on), or the touch pipeline.
+pub fn run_drop_side(speed: Real, floor: DropFloor, side: DropSide, steps: usize) -> DropRun {
     let (mut w, b) = drop_world(speed, floor);
+    if side == DropSide::RapierDefaults {
+        w.integration_parameters.max_ccd_substeps =
+            rapier3d::dynamics::IntegrationParameters::default().max_ccd_substeps;
+    }
+    let with_crate = side == DropSide::Touch;
     let mut touch = crate::hooks::TouchPipeline::default();
     let mut depth = Vec::with_capacity(steps);
     let mut tunneled_at = None;
