@@ -226,17 +226,23 @@ impl Reconstructor {
             };
         };
         let penetrating_now = tau_a == 0.0 || pen(self, 0.0);
-        // Bisection until the rotation over the bracket is below the tolerance.
-        let mut iters = 0;
-        while (tau_b - tau_a) * angle * radius > tol && iters < 64 {
-            let mid = 0.5 * (tau_a + tau_b);
-            if pen(self, mid) {
-                tau_a = mid;
-            } else {
-                tau_b = mid;
+        // Bisection on "penetrating" until the bracket, times `rate` (the largest distance a
+        // point travels per unit of `tau`), is below the tolerance; at most 64 halvings.
+        let bisect = |this: &mut Self, tau_a: &mut f64, tau_b: &mut f64, rate: f64| {
+            for _ in 0..64 {
+                if (*tau_b - *tau_a) * rate <= tol {
+                    break;
+                }
+                let mid = 0.5 * (*tau_a + *tau_b);
+                if pen(this, mid) {
+                    *tau_a = mid;
+                } else {
+                    *tau_b = mid;
+                }
             }
-            iters += 1;
-        }
+        };
+        // First until the rotation over the bracket is below the tolerance.
+        bisect(self, &mut tau_a, &mut tau_b, angle * radius);
         let (mut pa, mut pb) = (back(tau_a), back(tau_b));
         let mut sub = self
             .translate_back(fixed, pos_fixed, moving, &pa, &pb)
@@ -245,15 +251,7 @@ impl Reconstructor {
             // The sub-step's start already overlaps by a rounding of the predicate (its way
             // out would leave the path): bisect on, until the whole motion over the bracket is
             // below the tolerance, and try again.
-            while (tau_b - tau_a) * travel > tol && iters < 128 {
-                let mid = 0.5 * (tau_a + tau_b);
-                if pen(self, mid) {
-                    tau_a = mid;
-                } else {
-                    tau_b = mid;
-                }
-                iters += 1;
-            }
+            bisect(self, &mut tau_a, &mut tau_b, travel);
             (pa, pb) = (back(tau_a), back(tau_b));
             sub = self
                 .translate_back(fixed, pos_fixed, moving, &pa, &pb)

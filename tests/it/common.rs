@@ -174,3 +174,26 @@ pub fn scaled_mesh(m: &TouchMesh, k: f32) -> TouchMesh {
 pub fn scaled_pose(p: &Pose, k: f32) -> Pose {
     Pose::from_parts(p.translation * k, p.rotation)
 }
+
+/// Proptest strategies shared by the property tests.
+pub mod strategies {
+    use proptest::prelude::*;
+    use rapier_touch::prelude::*;
+
+    /// A vector in the cube `[-1, 1]³`.
+    pub fn vec3() -> impl Strategy<Value = Vector> {
+        (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0).prop_map(|(x, y, z)| Vector::new(x, y, z))
+    }
+
+    /// A rotation about a random axis by up to π.
+    pub fn rotation() -> impl Strategy<Value = Rotation> {
+        (vec3(), 0.0f32..std::f32::consts::PI).prop_map(|(axis, angle)| {
+            Rotation::from_axis_angle(axis.try_normalize().unwrap_or(Vector::X), angle)
+        })
+    }
+
+    /// A unit direction.
+    pub fn direction() -> impl Strategy<Value = Vector> {
+        vec3().prop_filter_map("non-zero", |v| v.try_normalize())
+    }
+}

@@ -3,24 +3,11 @@
 //! brute-force reference written in the test to 1e-5 of the scale, a scaled scene gives the
 //! scaled answer, and swapping which object moves gives the same depth.
 
+use crate::common::strategies::{direction, rotation, vec3};
 use crate::common::{reference_first_touch, scaled_mesh, scaled_pose};
 use proptest::prelude::*;
 use rapier_touch::geometry::generators::{icosphere, subdivided_box};
 use rapier_touch::prelude::*;
-
-fn vec3() -> impl Strategy<Value = Vector> {
-    (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0).prop_map(|(x, y, z)| Vector::new(x, y, z))
-}
-
-fn rotation() -> impl Strategy<Value = Rotation> {
-    (vec3(), 0.0f32..std::f32::consts::PI).prop_map(|(axis, angle)| {
-        Rotation::from_axis_angle(axis.try_normalize().unwrap_or(Vector::X), angle)
-    })
-}
-
-fn direction() -> impl Strategy<Value = Vector> {
-    vec3().prop_filter_map("non-zero", |v| v.try_normalize())
-}
 
 /// Unit-size convex meshes: hulls of random points, split boxes, icospheres.
 fn convex_mesh() -> impl Strategy<Value = TouchMesh> {

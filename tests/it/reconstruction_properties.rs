@@ -4,25 +4,12 @@
 //! agrees with parry's linear shape cast for convex pairs, and swapping which object moves
 //! gives the same contact.
 
+use crate::common::strategies::{direction, rotation, vec3};
 use crate::common::{shifted, surface_distance, surfaces_intersect};
 use parry3d::query::{self, ShapeCastOptions};
 use proptest::prelude::*;
 use rapier_touch::geometry::generators::{icosphere, subdivided_box};
 use rapier_touch::prelude::*;
-
-fn vec3() -> impl Strategy<Value = Vector> {
-    (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0).prop_map(|(x, y, z)| Vector::new(x, y, z))
-}
-
-fn rotation() -> impl Strategy<Value = Rotation> {
-    (vec3(), 0.0f32..std::f32::consts::PI).prop_map(|(axis, angle)| {
-        Rotation::from_axis_angle(axis.try_normalize().unwrap_or(Vector::X), angle)
-    })
-}
-
-fn direction() -> impl Strategy<Value = Vector> {
-    vec3().prop_filter_map("non-zero", |v| v.try_normalize())
-}
 
 /// A random convex polyhedron, as a parry support-map shape and as its touch mesh (the exact
 /// hull of the shape's points: parry's own `f32` quickhull of the raw points can leave points

@@ -5,23 +5,10 @@
 //! the path penetrating; the touch pose lies on the path at the reported time of impact.
 
 use crate::common::scaled_mesh;
+use crate::common::strategies::{direction, rotation, vec3};
 use parry3d::query;
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
-
-fn vec3() -> impl Strategy<Value = Vector> {
-    (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0).prop_map(|(x, y, z)| Vector::new(x, y, z))
-}
-
-fn rotation() -> impl Strategy<Value = Rotation> {
-    (vec3(), 0.0f32..std::f32::consts::PI).prop_map(|(axis, angle)| {
-        Rotation::from_axis_angle(axis.try_normalize().unwrap_or(Vector::X), angle)
-    })
-}
-
-fn direction() -> impl Strategy<Value = Vector> {
-    vec3().prop_filter_map("non-zero", |v| v.try_normalize())
-}
 
 /// A random convex polyhedron (parry's shape stays at unit scale, where its f32 tolerances are
 /// small; the crate sees its touch mesh scaled).
