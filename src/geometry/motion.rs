@@ -60,8 +60,13 @@ impl RigidMotion {
 
     /// The angle the object turns through over the step (radians, in `[0, π]`).
     pub fn angle(&self) -> Real {
+        self.dangle() as Real
+    }
+
+    /// [`RigidMotion::angle`] in `f64`.
+    pub(crate) fn dangle(&self) -> f64 {
         let (q0, q1) = self.rotations();
-        q0.angle_between(q1) as Real
+        q0.angle_between(q1)
     }
 
     /// `true` when every component is finite.
@@ -76,12 +81,21 @@ impl RigidMotion {
         )
     }
 
+    /// The world positions of the centre of mass at the start and at the end, in `f64`.
+    pub(crate) fn centres(&self) -> (DVec3, DVec3) {
+        let (q0, q1) = self.rotations();
+        let lc = self.local_center.as_dvec3();
+        (
+            q0 * lc + self.start.translation.as_dvec3(),
+            q1 * lc + self.end.translation.as_dvec3(),
+        )
+    }
+
     /// The pose at time `t`, in `f64`: (rotation, translation).
     pub(crate) fn dpose_at(&self, t: f64) -> (DQuat, DVec3) {
         let (q0, q1) = self.rotations();
         let lc = self.local_center.as_dvec3();
-        let c0 = q0 * lc + self.start.translation.as_dvec3();
-        let c1 = q1 * lc + self.end.translation.as_dvec3();
+        let (c0, c1) = self.centres();
         // glam's slerp takes the shortest arc (it flips `q1` when the dot product is negative).
         let q = if t <= 0.0 {
             q0
@@ -97,11 +111,8 @@ impl RigidMotion {
     /// The largest distance any point within `radius` of the centre of mass travels over the
     /// step: the centre's displacement plus the arc of the rotation.
     pub(crate) fn max_travel(&self, radius: f64) -> f64 {
-        let (q0, q1) = self.rotations();
-        let lc = self.local_center.as_dvec3();
-        let c0 = q0 * lc + self.start.translation.as_dvec3();
-        let c1 = q1 * lc + self.end.translation.as_dvec3();
-        c0.distance(c1) + q0.angle_between(q1) * radius
+        let (c0, c1) = self.centres();
+        c0.distance(c1) + self.dangle() * radius
     }
 }
 
@@ -127,6 +138,7 @@ impl Reconstructor {
     ///    bracket until the rotation over it moves no point by more than the tolerance.
     /// 4. Over that sub-step the motion is a translation to within the tolerance: the paper's
     ///    exact method (eq. 1-3) finds the touching features and the touch pose.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn rotate_back(
         &mut self,
         fixed: &TouchMesh,
@@ -135,10 +147,10 @@ impl Reconstructor {
         motion: &RigidMotion,
         tol: f64,
         radius: f64,
+        angle: f64,
     ) -> ContactConfiguration {
         let now = motion.end;
         let back = |tau: f64| motion.pose_at((1.0 - tau) as Real);
-        let angle = motion.angle() as f64;
         let travel = motion.max_travel(radius);
         // Direction of travel: the centre of mass's, or toward the fixed object when it only
         // spins.
@@ -146,16 +158,12 @@ impl Reconstructor {
             pos_fixed.rotation.as_dquat(),
             pos_fixed.translation.as_dvec3(),
         );
-        let lc = motion.local_center.as_dvec3();
-        let centre = |t: f64| {
-            let (q, p) = motion.dpose_at(t);
-            q * lc + p
-        };
-        let u_world = (centre(1.0) - centre(0.0))
+        let (c_start, c_end) = motion.centres();
+        let u_world = (c_end - c_start)
             .try_normalize()
             .or_else(|| {
                 let cf = qf * fixed.local_aabb().center().as_dvec3() + tf;
-                (cf - centre(1.0)).try_normalize()
+                (cf - c_end).try_normalize()
             })
             .unwrap_or(DVec3::NEG_Y);
         let separated = ContactConfiguration {
@@ -173,7 +181,7 @@ impl Reconstructor {
 
         // Quick reject: the swept bounding sphere misses the fixed object's box.
         let inv_f = qf.conjugate();
-        let (a, b) = (inv_f * (centre(0.0) - tf), inv_f * (centre(1.0) - tf));
+        let (a, b) = (inv_f * (c_start - tf), inv_f * (c_end - tf));
         let fb = fixed.local_aabb();
         let pad = DVec3::splat(radius + 4.0 * tol);
         if (a.min(b) - pad).cmpgt(fb.maxs.as_dvec3()).any()

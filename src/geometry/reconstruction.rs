@@ -289,9 +289,10 @@ impl Reconstructor {
     /// - When the motion turns every point of `moving` by less than the tolerance, it is a
     ///   translation and the paper's method runs unchanged (eq. 1-3 along `-D`).
     /// - Otherwise first touch is searched along the real path (`docs/method.md` §2.6):
-    ///   samples of the path spaced so that neither object can be skipped, a bisection on "penetrating" down to a sub-step over which the rotation moves
-    ///   no point by more than the tolerance, and there the exact translation method, in
-    ///   `f64`, on the touching features. The result is the pose on the path where the objects
+    ///   samples of the path spaced so that neither object can be skipped, a bisection on
+    ///   "penetrating" down to a sub-step over which the rotation moves no point by more than
+    ///   the tolerance, and there the exact translation method, in `f64`, on the touching
+    ///   features. The result is the pose on the path where the objects
     ///   first touch ([`ContactConfiguration::touch_pose`]), within the tolerance.
     /// - A corner that dips in and out between two samples (spacing below half the larger
     ///   smallest extent of the two objects) is not seen.
@@ -329,14 +330,11 @@ impl Reconstructor {
         let scale = fixed.scale().max(moving.scale()) as f64;
         let tol = (self.options.tolerance as f64).clamp(1e-9, 1e-3) * scale;
         let radius = bounding_radius(moving, motion.local_center);
-        let (q0, q1) = (
-            motion.start.rotation.as_dquat().normalize(),
-            motion.end.rotation.as_dquat().normalize(),
-        );
-        if q0.angle_between(q1) * radius <= tol {
+        let angle = motion.dangle();
+        if angle * radius <= tol {
             return self.translate_back(fixed, pos_fixed, moving, &motion.end, &motion.start);
         }
-        Ok(self.rotate_back(fixed, pos_fixed, moving, motion, tol, radius))
+        Ok(self.rotate_back(fixed, pos_fixed, moving, motion, tol, radius, angle))
     }
 
     /// The relative frame of `moving` at world pose `pose` against `fixed` at `pos_fixed`,
@@ -391,9 +389,6 @@ impl Reconstructor {
     ) -> Result<ContactConfiguration, ReconstructionError> {
         let (rf, tf) = dpose(pos_fixed);
         let (rm, tm) = dpose(pos_moving);
-        let rf_inv = rf.conjugate();
-        let rot = rf_inv * rm;
-        let tra = rf_inv * (tm - tf);
         let scale = fixed.scale().max(moving.scale()) as f64;
         let tol = (self.options.tolerance as f64).clamp(1e-9, 1e-3) * scale;
 
@@ -419,15 +414,7 @@ impl Reconstructor {
             (dir, DirectionSource::ZeroMotionFallback, f64::INFINITY)
         };
 
-        self.ws.prepare(fixed, moving);
-        let stamp = self.ws.stamp();
-        let fr = Frame {
-            rot,
-            tra,
-            u: rf_inv * u_world,
-            tol,
-            stamp,
-        };
+        let fr = self.frame_at(fixed, pos_fixed, moving, pos_moving, u_world, tol);
         let mut result = ContactConfiguration {
             state: TouchState::Separated,
             reversing_vector: Vector::ZERO,

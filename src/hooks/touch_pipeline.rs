@@ -357,11 +357,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 .colliders()
                 .iter()
                 .filter_map(|c| world.colliders.get(*c))
-                .map(|c| {
-                    c.position_wrt_parent()
-                        .map_or(0.0, |p| p.translation.length())
-                        + c.shape().compute_local_bounding_sphere().radius
-                })
+                .map(collider_reach)
                 .fold(0.0, Real::max);
             let step = (pose.translation - prev.translation).length()
                 + prev.rotation.angle_between(pose.rotation) * radius;
@@ -409,10 +405,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
                     // How far a point of the collider may have travelled: translation plus the
                     // arc of its rotation.
-                    let radius = co.shape().compute_local_bounding_sphere().radius
-                        + co.position_wrt_parent()
-                            .map_or(0.0, |p| p.translation.length());
-                    let turn = prev_pose.rotation.angle_between(pose_now.rotation) * radius;
+                    let turn =
+                        prev_pose.rotation.angle_between(pose_now.rotation) * collider_reach(co);
                     let fast = d.length() + turn >= mesh.min_extent().min(prediction);
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
@@ -680,6 +674,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
         sync_moved_colliders(world, &mut moved_bodies);
     }
+}
+
+/// How far a point of collider `co` can be from its body's origin: the offset to its parent
+/// plus its bounding radius (a turn by `θ` moves it by at most `θ` times this).
+fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
+    co.position_wrt_parent()
+        .map_or(0.0, |p| p.translation.length())
+        + co.shape().compute_local_bounding_sphere().radius
 }
 
 /// Puts the colliders of the bodies the guard moved where their bodies now are, and their
