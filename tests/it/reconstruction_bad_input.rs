@@ -242,3 +242,68 @@ fn huge_finite_poses_do_not_panic() {
         );
     }
 }
+
+/// Bad input on rotating paths: a NaN or infinite centre of rotation or rotation is an error,
+/// not a NaN pose; a zero-thickness floor (no smallest extent) and a zero-length rotation
+/// about a far centre still give finite answers.
+#[test]
+fn bad_rotating_motions_are_errors_or_finite() {
+    let (floor, c) = (cube(2.0), cube(0.5));
+    let id = Pose::IDENTITY;
+    let mut rec = Reconstructor::default();
+    let start = Pose::from_translation(Vector::new(0.0, 3.0, 0.0));
+    let end = Pose::from_parts(Vector::new(0.0, 2.2, 0.0), Rotation::from_rotation_z(0.7));
+    for center in [
+        Vector::new(f32::NAN, 0.0, 0.0),
+        Vector::new(0.0, f32::INFINITY, 0.0),
+    ] {
+        let m = RigidMotion::new(start, end, center);
+        assert_eq!(
+            rec.reconstruct_motion(&floor, &id, &c, &m),
+            Err(ReconstructionError::NonFinitePose)
+        );
+    }
+    let nan_rot = Pose::from_parts(
+        end.translation,
+        Rotation::from_xyzw(f32::NAN, 0.0, 0.0, 1.0),
+    );
+    let m = RigidMotion::new(start, nan_rot, Vector::ZERO);
+    assert_eq!(
+        rec.reconstruct_motion(&floor, &id, &c, &m),
+        Err(ReconstructionError::NonFinitePose)
+    );
+    // A flat floor (one quad, no thickness) under a cube that turns while it falls through it.
+    let quad = TouchMesh::new(
+        vec![
+            Vector::new(-5.0, 0.0, -5.0),
+            Vector::new(5.0, 0.0, -5.0),
+            Vector::new(5.0, 0.0, 5.0),
+            Vector::new(-5.0, 0.0, 5.0),
+        ],
+        vec![[0, 2, 1], [0, 3, 2]],
+    )
+    .unwrap();
+    assert_eq!(quad.min_extent(), 0.0);
+    let below = Pose::from_parts(Vector::new(0.0, -2.0, 0.0), Rotation::from_rotation_z(0.7));
+    let r = rec
+        .reconstruct_motion(
+            &quad,
+            &id,
+            &c,
+            &RigidMotion::new(start, below, Vector::ZERO),
+        )
+        .unwrap();
+    assert_eq!(r.state, TouchState::Perforated);
+    assert!(r.touch_pose.is_finite());
+    // It stopped on the floor: its lowest corner at y = 0 within the tolerance.
+    let lowest = c
+        .vertices()
+        .iter()
+        .map(|&v| r.touch_pose.transform_point(v).y)
+        .fold(f32::MAX, f32::min);
+    assert!(lowest.abs() < 1e-4, "lowest corner at {lowest}");
+    // A tiny turn about a centre 1e6 m away: a huge but finite sweep.
+    let far = RigidMotion::new(start, end, Vector::new(1.0e6, 0.0, 0.0));
+    let r = rec.reconstruct_motion(&floor, &id, &c, &far).unwrap();
+    assert!(r.touch_pose.is_finite() && r.reversing_vector.is_finite());
+}

@@ -39,9 +39,17 @@ fn l_prism() -> (Vec<Vector>, Vec<[u32; 3]>) {
     (v.into_iter().map(|p| p - c).collect(), i)
 }
 
-/// Drops `mover` from 2 m with vertical speed `speed` and angular velocity `spin`; returns the
-/// deepest any vertex went below `y = 0` after a step, or `None` if it went through.
-fn drop(floor: Floor, mover: Mover, speed: f32, spin: Vector, hook_flags: bool) -> Option<f32> {
+/// Drops `mover` (of the given density) from 2 m with vertical speed `speed` and angular
+/// velocity `spin`; returns the deepest any vertex went below `y = 0` after a step, or `None` if
+/// it went through.
+fn drop(
+    floor: Floor,
+    mover: Mover,
+    speed: f32,
+    spin: Vector,
+    hook_flags: bool,
+    density: f32,
+) -> Option<f32> {
     let mut w = PhysicsWorld::default();
     w.integration_parameters.max_ccd_substeps = 0; // rapier's CCD off: the guard alone
     TouchPipeline::configure(&mut w.integration_parameters);
@@ -86,7 +94,7 @@ fn drop(floor: Floor, mover: Mover, speed: f32, spin: Vector, hook_flags: bool) 
             (v.clone(), ColliderBuilder::trimesh(v, i).unwrap())
         }
     };
-    let ch = w.insert_collider(collider.active_hooks(flags), Some(body));
+    let ch = w.insert_collider(collider.active_hooks(flags).density(density), Some(body));
     let mut touch = TouchPipeline::default();
     if !hook_flags {
         touch.track_collider(fh);
@@ -122,7 +130,7 @@ fn spinning_bodies_stay_within_a_millimetre_of_the_floor() {
                     Vector::new(17.0, 17.0, 17.0), // |ω| = 29.4 rad/s about a diagonal
                 ] {
                     for hook_flags in [false, true] {
-                        let r = drop(floor, mover, speed, spin, hook_flags);
+                        let r = drop(floor, mover, speed, spin, hook_flags, 1.0);
                         match r {
                             Some(d) => {
                                 worst = worst.max(d);
@@ -146,4 +154,24 @@ fn spinning_bodies_stay_within_a_millimetre_of_the_floor() {
         "worst {worst} m:\n{}",
         failures.join("\n")
     );
+}
+
+/// The same bound for light and heavy bodies: the box at 1 g (density 0.008) and at 1 t
+/// (density 8000), the L prism likewise, spinning at 29.4 rad/s and falling at 50 m/s.
+#[test]
+fn light_and_heavy_spinning_bodies_stay_within_a_millimetre() {
+    let spin = Vector::new(17.0, 17.0, 17.0);
+    for density in [0.008, 8000.0] {
+        for floor in [Floor::Cuboid, Floor::ThinTriMesh] {
+            for mover in [Mover::Box, Mover::LPrism] {
+                for hook_flags in [false, true] {
+                    let d = drop(floor, mover, 50.0, spin, hook_flags, density);
+                    assert!(
+                        d.is_some_and(|d| d <= 1e-3),
+                        "{floor:?} {mover:?} density {density} hooks {hook_flags}: {d:?}"
+                    );
+                }
+            }
+        }
+    }
 }
