@@ -14,7 +14,12 @@
 //!   bodies, so exact positions come from the step guard, between steps.
 //! - Set `IntegrationParameters::contact_clustering = false` ([`TouchPipeline::configure`]).
 //! - Sleeping bodies are not guarded (they do not move); a collider whose shape has no
-//!   triangle-mesh form (height fields, compounds, voxels) is left to rapier.
+//!   triangle-mesh form (half-spaces, segments, polylines, custom shapes) is left to rapier
+//!   ([`TouchPipeline::refused_colliders`]).
+//! - Curved shapes (balls, capsules, cylinders, cones, rounded shapes) are guarded through a
+//!   tessellation; the hooks never rewrite their contacts (rapier's are exact). The guard's
+//!   reconstructions of tumbling curved bodies are costly (see the README's stress-scene
+//!   table).
 
 mod pair_filter;
 mod report;

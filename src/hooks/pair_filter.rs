@@ -1,7 +1,7 @@
 //! Whether rapier would solve contacts between two colliders: the guard corrects only such
 //! pairs, so a body passes through whatever rapier lets it pass (sensors, excluded collision or
-//! solver groups, disabled colliders and bodies, `ActiveCollisionTypes`, the user's
-//! `filter_contact_pair`).
+//! solver groups, disabled colliders and bodies, `ActiveCollisionTypes`, joints with contacts
+//! disabled, the user's `filter_contact_pair`).
 //!
 //! rapier 0.36 decides this in its narrow phase (`geometry/narrow_phase/pair_update.rs`,
 //! `process_pair`) with no public entry point, and a pair the step guard meets may not be in
@@ -9,7 +9,7 @@
 //! therefore applied here in rapier's own order, on rapier's own flags, and the user's
 //! filtering hook is asked exactly as rapier asks it.
 
-use rapier3d::dynamics::{RigidBodySet, RigidBodyType};
+use rapier3d::dynamics::{ImpulseJointSet, MultibodyJointSet, RigidBodySet, RigidBodyType};
 use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
 use rapier3d::pipeline::{ActiveHooks, PairFilterContext, PhysicsHooks};
 
@@ -17,11 +17,14 @@ use rapier3d::pipeline::{ActiveHooks, PairFilterContext, PhysicsHooks};
 /// `hooks` asked for pairs with `ActiveHooks::FILTER_CONTACT_PAIRS`). With `tool`, the
 /// `ActiveCollisionTypes` rule is skipped: a tool is a kinematic body the crate stops at first
 /// touch itself (its proxy), also against fixed colliders, which rapier's default collision
-/// types leave out. Not covered: the multibody self-contact and joint rules (two links of one
-/// multibody are treated as solved).
+/// types leave out. Joints are rapier's rule too: bodies joined by an impulse or multibody
+/// joint with contacts disabled, and links of a multibody whose self-contacts are off, are
+/// never paired (a ragdoll's limbs overlap at their joints).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn rapier_solves_pair(
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
+    (impulse_joints, multibody_joints): (&ImpulseJointSet, &MultibodyJointSet),
     hooks: &dyn PhysicsHooks,
     c1: ColliderHandle,
     c2: ColliderHandle,
@@ -38,6 +41,33 @@ pub(crate) fn rapier_solves_pair(
     let (rb1, rb2) = (co1.parent(), co2.parent());
     if rb1.is_some() && rb1 == rb2 {
         return false;
+    }
+    if let (Some(b1), Some(b2)) = (rb1, rb2) {
+        if impulse_joints
+            .joints_between(b1, b2)
+            .any(|(_, j)| !j.data.contacts_enabled)
+        {
+            return false;
+        }
+        if let (Some(l1), Some(l2)) = (
+            multibody_joints.rigid_body_link(b1),
+            multibody_joints.rigid_body_link(b2),
+        ) {
+            if l1.multibody == l2.multibody {
+                if multibody_joints
+                    .get_multibody(l1.multibody)
+                    .is_some_and(|mb| !mb.self_contacts_enabled())
+                {
+                    return false;
+                }
+                if multibody_joints
+                    .joint_between(b1, b2)
+                    .is_some_and(|(_, _, link)| !link.joint.data.contacts_enabled)
+                {
+                    return false;
+                }
+            }
+        }
     }
     let body_type = |h: Option<_>| {
         h.and_then(|h| bodies.get(h))

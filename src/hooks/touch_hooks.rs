@@ -21,6 +21,23 @@ type PairCache = HashMap<(ColliderHandle, ColliderHandle), Option<Arc<ContactCon
 pub(crate) struct CachedMesh {
     pub shape_ptr: usize,
     pub mesh: Arc<TouchMesh>,
+    /// The mesh is the shape itself (a polyhedral shape), not a tessellation of a curved one.
+    pub exact: bool,
+}
+
+/// Shapes whose touch mesh is the shape itself: their surface is made of flat triangles.
+pub(crate) fn meshed_exactly(shape: &dyn parry3d::shape::Shape) -> bool {
+    use parry3d::shape::TypedShape;
+    match shape.as_typed_shape() {
+        TypedShape::TriMesh(_)
+        | TypedShape::Triangle(_)
+        | TypedShape::HeightField(_)
+        | TypedShape::Voxels(_)
+        | TypedShape::Cuboid(_)
+        | TypedShape::ConvexPolyhedron(_) => true,
+        TypedShape::Compound(c) => c.shapes().iter().all(|(_, s)| meshed_exactly(&**s)),
+        _ => false,
+    }
 }
 
 /// Counters of what the hooks did during the last step (they never panic; what they skip is
@@ -30,7 +47,9 @@ pub struct HookCounters {
     /// Manifolds whose solver contacts were moved onto the reconstructed first touch.
     pub rewritten: usize,
     /// Manifolds whose penetrating solver contacts were removed because the reconstruction
-    /// found the pair apart.
+    /// found the pair apart. Only pairs of polyhedral shapes (cuboids, convex polyhedra,
+    /// triangle meshes, height fields, voxels, compounds of these): a curved shape's mesh is a
+    /// tessellation, and rapier's contacts on the true shape are kept.
     pub dropped: usize,
     /// Deep manifolds left to rapier: a collider without a touch mesh, a shape that has no
     /// triangle-mesh form, or a failed reconstruction.
@@ -44,7 +63,11 @@ pub struct HookCounters {
 /// rapier calls `modify_solver_contacts` at the start of `step`, on the poses the previous step
 /// left (after [`super::TouchPipeline`]'s corrections), for colliders with
 /// `ActiveHooks::MODIFY_SOLVER_CONTACTS`. For such a manifold, when rapier finds a solver
-/// contact deeper than the slop and both colliders have touch meshes, it reconstructs the pair along its relative motion over the previous step
+/// contact deeper than the slop but no deeper than the two bodies travelled over the previous
+/// step (deeper, the pair already overlapped before it: a resting contact rapier is resolving),
+/// and both colliders are polyhedra (cuboids, convex polyhedra, triangle meshes, height
+/// fields, voxels: a curved shape's touch mesh is a tessellation and rapier's own contacts on
+/// it are exact), it reconstructs the pair along its relative motion over the previous step
 /// (from the pose history the pipeline records), then:
 /// - **penetrating deeper than the slop or perforated, first touch on the last step's path:**
 ///   sets the manifold normal to the first-touch patch normal and, for each solver contact,
@@ -169,6 +192,45 @@ pub(crate) fn body_motion(
         .unwrap_or(Vector::ZERO)
 }
 
+/// An upper bound on how far any point of collider `c2` moved relative to collider `c1` over
+/// the last step: both bodies' translations plus the arcs of their rotations (infinite when
+/// a pose is not finite).
+pub(crate) fn relative_travel(
+    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    c1: ColliderHandle,
+    c2: ColliderHandle,
+) -> crate::math::Real {
+    let arc = |c: ColliderHandle| -> (Vector, crate::math::Real) {
+        let Some(co) = colliders.get(c) else {
+            return (Vector::ZERO, 0.0);
+        };
+        let Some((body, prev)) = co
+            .parent()
+            .and_then(|h| Some((bodies.get(h)?, prev_poses.get(&h)?)))
+        else {
+            return (Vector::ZERO, 0.0);
+        };
+        let now = body.position();
+        let reach = co
+            .position_wrt_parent()
+            .map_or(0.0, |p| p.translation.length())
+            + co.shape().compute_local_bounding_sphere().radius;
+        (
+            now.translation - prev.translation,
+            prev.rotation.angle_between(now.rotation) * reach,
+        )
+    };
+    let ((d1, a1), (d2, a2)) = (arc(c1), arc(c2));
+    let t = (d2 - d1).length() + a1 + a2;
+    if t.is_finite() {
+        t
+    } else {
+        crate::math::Real::INFINITY
+    }
+}
+
 /// Where collider `c` was at the start of the step: its body's recorded pose times the
 /// collider's offset, or `pos` (its pose now) when the body has no history or it has no body.
 pub(crate) fn previous_collider_pose(
@@ -249,11 +311,24 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
 
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
         let (c1, c2) = (context.collider1, context.collider2);
-        // Only manifolds rapier finds deeper than the slop are worth a reconstruction.
-        let deep = context
-            .rigid()
-            .is_some_and(|m| m.solver_contacts.iter().any(|c| c.dist < -self.slop));
-        let config = if deep && self.meshes.contains_key(&c1) && self.meshes.contains_key(&c2) {
+        // Only manifolds rapier finds deeper than the slop are worth a reconstruction, and only
+        // if the pair can have first touched on the last step's path: a pair deeper than the
+        // two bodies travelled over that step already overlapped when it began (a resting
+        // contact rapier is resolving), and is left as rapier made it.
+        let depth = context.rigid().map_or(0.0, |m| {
+            m.solver_contacts
+                .iter()
+                .map(|c| -c.dist)
+                .fold(0.0, crate::math::Real::max)
+        });
+        let deep = depth > self.slop
+            && depth
+                <= self.slop
+                    + relative_travel(&self.prev_poses, context.bodies, context.colliders, c1, c2);
+        // rapier's contacts on a curved shape (a ball, a capsule, a rounded shape) are exact
+        // where its touch mesh is a tessellation: only pairs of polyhedra are rewritten.
+        let exact = |c| self.meshes.get(&c).map(|m| m.exact);
+        let config = if deep && exact(c1) == Some(true) && exact(c2) == Some(true) {
             self.reconstruct_pair(context.bodies, context.colliders, c1, c2)
         } else {
             None
@@ -279,7 +354,10 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
                         sc.dist = -r.dot(n);
                     }
                     self.rewritten.fetch_add(1, Ordering::Relaxed);
-                } else if config.state == crate::geometry::TouchState::Separated {
+                } else if config.state == crate::geometry::TouchState::Separated
+                    && self.meshes.get(&c1).is_some_and(|m| m.exact)
+                    && self.meshes.get(&c2).is_some_and(|m| m.exact)
+                {
                     let before = m.solver_contacts.len();
                     m.solver_contacts.retain(|c| c.dist >= 0.0);
                     if m.solver_contacts.len() != before {
@@ -287,7 +365,7 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
                     }
                 }
             }
-            _ if deep => {
+            _ if deep && (exact(c1).is_none() || exact(c2).is_none()) => {
                 self.skipped.fetch_add(1, Ordering::Relaxed);
             }
             _ => {}

@@ -4,7 +4,7 @@
 use super::pair_filter::rapier_solves_pair;
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
-    body_motion, pair_configuration, previous_collider_pose, CachedMesh, TouchHooks,
+    body_motion, meshed_exactly, pair_configuration, previous_collider_pose, CachedMesh, TouchHooks,
 };
 use crate::geometry::{
     ReconstructionOptions, Reconstructor, TouchMesh, TouchMeshError, TouchState,
@@ -28,13 +28,14 @@ pub struct TouchOptions {
     /// rewrites manifolds (hooks) and reports.
     pub correct_poses: bool,
     /// Penetration tolerated for a body that already overlapped a fixed or kinematic collider
-    /// when the step began (a resting contact rapier is resolving with its own soft push-out).
-    /// Deeper than this after a step, the guard pushes the body back along rapier's contact
-    /// normal to this depth, so a tumbling or pressed body never digs into the floor. Resting
-    /// pairs of two dynamic bodies (a stack, whose soft contacts rapier lets overlap by about a
-    /// millimetre) are left to rapier. Default `9e-4` m: above rapier's usual resting
-    /// overlap (a resting stack is left to rapier and stays still), below the 1 mm a user sees.
-    /// Range `slop ..= 0.01`.
+    /// when the step began (a resting contact rapier is resolving with its own soft push-out;
+    /// rapier's own contact points say whether it did). Deeper than this after a step, the
+    /// guard pushes the body back along rapier's contact normal to the deeper of this depth and
+    /// the depth the pair had when the step began, so a tumbling or pressed body never digs
+    /// further into the floor, while rapier's steady overlap under a tall pile is left alone.
+    /// Resting pairs of two dynamic bodies (a stack, whose soft contacts rapier lets overlap by
+    /// about a millimetre) are left to rapier. Default `9e-4` m: above rapier's usual resting
+    /// overlap, below the 1 mm a user sees. Range `slop ..= 0.01`.
     pub resting_slop: Real,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,
@@ -296,6 +297,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         });
         let meshes = &mut self.hooks.meshes;
         meshes.retain(|h, _| colliders.contains(*h));
+        // Colliders sharing one shape (rapier's `SharedShape` is an `Arc`) share one mesh.
+        let mut by_shape: HashMap<usize, Arc<TouchMesh>> = meshes
+            .values()
+            .map(|m| (m.shape_ptr, m.mesh.clone()))
+            .collect();
         for (h, co) in colliders.iter() {
             if !co
                 .active_hooks()
@@ -311,14 +317,20 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             {
                 continue;
             }
-            match TouchMesh::from_shape(co.shape()) {
+            let built = match by_shape.get(&ptr) {
+                Some(mesh) => Ok(mesh.clone()),
+                None => TouchMesh::from_shape(co.shape()).map(Arc::new),
+            };
+            match built {
                 Ok(mesh) => {
                     self.refused.remove(&h);
+                    by_shape.insert(ptr, mesh.clone());
                     meshes.insert(
                         h,
                         CachedMesh {
                             shape_ptr: ptr,
-                            mesh: Arc::new(mesh),
+                            mesh,
+                            exact: meshed_exactly(co.shape()),
                         },
                     );
                 }
@@ -332,6 +344,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
     /// The step guard: moves bodies that penetrate (or went through something) back to first
     /// touch, and records the reports.
+    ///
+    /// A calm pile costs little: rapier's own contact points (computed at the step's start,
+    /// local to the colliders) are re-read at the poses now, as rapier's solver does, and say
+    /// whether a pair already overlapped when the step began and how deep it is now. They are
+    /// trusted while the pair moved less than rapier's prediction distance (they hold every
+    /// feature pair within it), and for curved shapes (rapier's contacts are exact there; the
+    /// touch mesh is a tessellation). A body that moved less than half the slop is skipped
+    /// against fixed and dynamic partners (a dynamic partner that moved checks the pair).
     ///
     /// Work is bounded three ways. A body slower than its safe step length cannot have tunneled,
     /// so only the partners rapier's narrow phase already pairs it with are looked at (a swept
@@ -371,20 +391,31 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::new();
         let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
+        let mut moved_before = 0;
         for pass in 0..passes {
             let mut moved = false;
-            let movers: Vec<RigidBodyHandle> = world
-                .bodies
-                .iter()
-                .filter(|(h, b)| {
-                    (b.is_dynamic() || self.tools.contains_key(h))
-                        && !b.is_sleeping()
-                        && b.colliders()
-                            .iter()
-                            .any(|c| self.hooks.meshes.contains_key(c))
-                })
-                .map(|(h, _)| h)
-                .collect();
+            // Later passes look again only at the bodies the previous pass moved (a correction
+            // can push a body into a third one).
+            let movers: Vec<RigidBodyHandle> = if pass == 0 {
+                world
+                    .bodies
+                    .iter()
+                    .filter(|(h, b)| {
+                        (b.is_dynamic() || self.tools.contains_key(h))
+                            && !b.is_sleeping()
+                            && b.colliders()
+                                .iter()
+                                .any(|c| self.hooks.meshes.contains_key(c))
+                    })
+                    .map(|(h, _)| h)
+                    .collect()
+            } else {
+                let mut m = moved_bodies[moved_before..].to_vec();
+                m.sort_unstable_by_key(|h| h.into_raw_parts());
+                m.dedup();
+                m
+            };
+            moved_before = moved_bodies.len();
             for bh in movers {
                 let Some(body) = world.bodies.get(bh) else {
                     continue;
@@ -394,6 +425,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 let is_tool = self.tools.contains_key(&bh);
                 let own: Vec<ColliderHandle> = body.colliders().to_vec();
                 for ch in own {
+                    let mesh_exact = self.hooks.meshes.get(&ch).is_some_and(|m| m.exact);
                     let Some(mesh) = self.hooks.meshes.get(&ch).map(|m| m.mesh.clone()) else {
                         continue;
                     };
@@ -421,17 +453,77 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             .map(|(h, _)| h)
                             .collect()
                     } else {
-                        world
-                            .narrow_phase
-                            .contact_pairs_with(ch)
-                            .map(|p| {
-                                if p.collider1 == ch {
-                                    p.collider2
-                                } else {
-                                    p.collider1
+                        // A slow body: only rapier's pairs, and among them only those its own
+                        // contact points (re-read at the poses now) do not show calm.
+                        // A body that moved less than half the slop changes a pair's depth by
+                        // less than the slop unless its partner moved too: a fixed partner did
+                        // not, and a dynamic one that did checks the pair from its side.
+                        let still =
+                            !self.options.report_touching && d.length() + turn <= 0.5 * slop;
+                        let mut calm_skipped = Vec::new();
+                        for p in world.narrow_phase.contact_pairs_with(ch) {
+                            let ph = if p.collider1 == ch {
+                                p.collider2
+                            } else {
+                                p.collider1
+                            };
+                            let Some(partner) = world.colliders.get(ph) else {
+                                continue;
+                            };
+                            if still
+                                && partner
+                                    .parent()
+                                    .and_then(|pb| world.bodies.get(pb))
+                                    .is_none_or(|b| !b.is_kinematic())
+                            {
+                                continue;
+                            }
+                            let partner_pose = collider_pose_now(&world.bodies, partner);
+                            let partner_prev = previous_collider_pose(
+                                &self.hooks.prev_poses,
+                                partner,
+                                partner_pose,
+                            );
+                            let travel = (d - body_motion(
+                                &self.hooks.prev_poses,
+                                &world.bodies,
+                                partner.parent(),
+                            ))
+                            .length()
+                                + turn
+                                + partner_prev.rotation.angle_between(partner_pose.rotation)
+                                    * collider_reach(partner);
+                            // rapier's points hold every feature pair within its prediction
+                            // distance at the step's start: they still tell the depth when
+                            // the pair moved less than that.
+                            let rc = rapier_contact_of(
+                                p,
+                                ph,
+                                (&partner_pose, &partner_prev),
+                                (&pose_now, &prev_pose),
+                            );
+                            let trusted = travel <= prediction
+                                || !(mesh_exact
+                                    && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact));
+                            let partner_dynamic = partner
+                                .parent()
+                                .and_then(|pb| world.bodies.get(pb))
+                                .is_some_and(|b| b.is_dynamic());
+                            let calm = match &rc {
+                                Some(r) if r.overlapped_at_start => {
+                                    partner_dynamic
+                                        || (trusted && r.depth <= self.options.resting_slop)
                                 }
-                            })
-                            .collect()
+                                Some(r) => {
+                                    !self.options.report_touching && trusted && r.depth <= slop
+                                }
+                                None => !self.options.report_touching && travel <= slop,
+                            };
+                            if !calm {
+                                calm_skipped.push(ph);
+                            }
+                        }
+                        calm_skipped
                     };
                     for ph in partners {
                         let Some(partner) = world.colliders.get(ph) else {
@@ -450,6 +542,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         if !rapier_solves_pair(
                             &world.bodies,
                             &world.colliders,
+                            (&world.impulse_joints, &world.multibody_joints),
                             &self.hooks.inner,
                             a,
                             b,
@@ -461,100 +554,171 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         else {
                             continue;
                         };
-                        let partner_pose = match partner.parent() {
-                            Some(pb) => match (world.bodies.get(pb), partner.position_wrt_parent())
-                            {
-                                (Some(b), Some(rel)) => *b.position() * *rel,
-                                _ => *partner.position(),
-                            },
-                            None => *partner.position(),
-                        };
+                        let partner_pose = collider_pose_now(&world.bodies, partner);
                         let partner_body = partner.parent();
+                        let partner_dynamic = partner_body
+                            .and_then(|pb| world.bodies.get(pb))
+                            .is_some_and(|b| b.is_dynamic());
+                        // A pair rapier's manifold shows overlapping when the step began is a
+                        // resting contact rapier is resolving: no first touch on this step's
+                        // path. Pairs of two dynamic bodies (a stack) are rapier's; against a
+                        // fixed or kinematic partner, only a pair now deeper than the resting
+                        // slop is measured (along rapier's normal) and pushed back. Nothing is
+                        // reconstructed for the resting pairs of a calm pile.
+                        let partner_prev =
+                            previous_collider_pose(&self.hooks.prev_poses, partner, partner_pose);
+                        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner_body);
+                        let travel = (d - dp).length()
+                            + turn
+                            + partner_prev.rotation.angle_between(partner_pose.rotation)
+                                * collider_reach(partner);
+                        // rapier's contact points say whether the pair overlapped when the
+                        // step began. Their depth now is trusted while the pair moved less
+                        // than rapier's prediction distance (they hold every feature pair
+                        // within it at the step's start; a spinning body brings new corners
+                        // in).
+                        let rapier = rapier_contact(
+                            world,
+                            ph,
+                            (&partner_pose, &partner_prev),
+                            ch,
+                            (&pose_now, &prev_pose),
+                        );
+                        // A curved shape's contacts are rapier's exact ones (its touch mesh is
+                        // a tessellation): they are trusted at any travel.
+                        let trusted = travel <= prediction
+                            || !(mesh_exact && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact));
+                        let overlapped = rapier.is_some_and(|r| r.overlapped_at_start);
+                        if partner_dynamic && overlapped {
+                            continue;
+                        }
+                        // (A pair that moved farther is measured on its own path below.)
+                        let resting = rapier.filter(|_| overlapped && trusted);
+                        if let Some(r) = &resting {
+                            // Within the resting slop: rapier's.
+                            if r.depth <= self.options.resting_slop {
+                                continue;
+                            }
+                        }
                         let odo = |h: Option<RigidBodyHandle>| {
                             h.and_then(|h| self.odometers.get(&h).copied())
                                 .unwrap_or(0.0)
                         };
                         let (odo_self, odo_partner) = (odo(Some(bh)), odo(partner_body));
-                        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner_body);
-                        let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
-                            (a, b) if b > 0.0 => a.min(b),
-                            (a, _) => a,
-                        };
-                        let may_tunnel = (d - dp).length() >= safe;
-                        if !self.options.report_touching && !may_tunnel {
-                            // Skip pairs whose overlap cannot have grown past the slop.
-                            if let Some(st) = self.pair_states.get(&(ch, ph)) {
-                                let bound = st.overlap
-                                    + (odo_self - st.odo_self)
-                                    + (odo_partner - st.odo_partner);
+                        let (config, along_normal) = if let Some(r) = &resting {
+                            let mut rec = Reconstructor::new(ReconstructionOptions {
+                                zero_motion_direction: Some(-r.normal),
+                                ..self.options.reconstruction
+                            });
+                            let Ok(c) = rec.reconstruct(
+                                &partner_mesh,
+                                &partner_pose,
+                                &mesh,
+                                &pose_now,
+                                &pose_now,
+                            ) else {
+                                continue;
+                            };
+                            (c.clone(), Some(c))
+                        } else {
+                            let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
+                                (a, b) if b > 0.0 => a.min(b),
+                                (a, _) => a,
+                            };
+                            let may_tunnel = (d - dp).length() >= safe;
+                            if !self.options.report_touching && !may_tunnel {
+                                // A slow pair: rapier's own contact points, re-read at the poses
+                                // now, say how deep it is; with no points rapier found it apart
+                                // (beyond its prediction distance) when the step began, so it can
+                                // be no deeper than the pair's relative travel.
+                                let bound = match rapier {
+                                    Some(r) if trusted => r.depth,
+                                    _ => travel,
+                                };
                                 if bound <= slop {
                                     continue;
                                 }
                             }
-                            // With a prediction of 0 parry answers `None` for separated
-                            // shapes; a contact with a positive distance is one of its wrong
-                            // answers (seen for a small tumbling cuboid on a large one: +1.1 mm
-                            // where a corner was 1.1 mm deep). Such pairs are reconstructed.
-                            let measured = parry3d::query::contact(
-                                &partner_pose,
-                                partner.shape(),
-                                &pose_now,
-                                co.shape(),
-                                0.0,
-                            )
-                            .ok()
-                            .and_then(|c| match c {
-                                None => Some(0.0),
-                                Some(c) if c.dist <= 0.0 => Some(-c.dist),
-                                Some(_) => None,
-                            });
-                            if let Some(overlap) = measured {
-                                self.pair_states.insert(
-                                    (ch, ph),
-                                    PairState {
-                                        overlap,
-                                        odo_self,
-                                        odo_partner,
-                                    },
-                                );
-                                if overlap <= slop {
-                                    continue;
+                            // A pair rapier has contact points for, but that moved too far to
+                            // read them, is reconstructed: parry's contact query is not asked
+                            // (it answered wrongly for a 4 m plate lying on a 100 m floor).
+                            if !self.options.report_touching && !may_tunnel && rapier.is_none() {
+                                // Skip pairs whose overlap cannot have grown past the slop.
+                                if let Some(st) = self.pair_states.get(&(ch, ph)) {
+                                    let bound = st.overlap
+                                        + (odo_self - st.odo_self)
+                                        + (odo_partner - st.odo_partner);
+                                    if bound <= slop {
+                                        continue;
+                                    }
                                 }
-                            }
-                        }
-                        let Some(config) = pair_configuration(
-                            &mut self.reconstructor,
-                            &self.hooks.meshes,
-                            &self.hooks.prev_poses,
-                            &world.bodies,
-                            &world.colliders,
-                            ph,
-                            Some(partner_pose),
-                            ch,
-                            Some(pose_now),
-                        ) else {
-                            continue;
-                        };
-                        // A pair that already overlapped when the step began has no first touch
-                        // on this step's path: it is measured along rapier's own contact normal
-                        // instead (its exit along -D can be far away).
-                        let along_normal = if config.on_trajectory || !config.needs_correction() {
-                            None
-                        } else {
-                            rapier_normal(world, ph, ch).and_then(|n| {
-                                let mut rec = Reconstructor::new(ReconstructionOptions {
-                                    zero_motion_direction: Some(-n),
-                                    ..self.options.reconstruction
-                                });
-                                rec.reconstruct(
-                                    &partner_mesh,
+                                // With a prediction of 0 parry answers `None` for separated
+                                // shapes; a contact with a positive distance is one of its wrong
+                                // answers (seen for a small tumbling cuboid on a large one: +1.1 mm
+                                // where a corner was 1.1 mm deep). Such pairs are reconstructed.
+                                let measured = parry3d::query::contact(
                                     &partner_pose,
-                                    &mesh,
+                                    partner.shape(),
                                     &pose_now,
-                                    &pose_now,
+                                    co.shape(),
+                                    0.0,
                                 )
                                 .ok()
-                            })
+                                .and_then(|c| match c {
+                                    None => Some(0.0),
+                                    Some(c) if c.dist <= 0.0 => Some(-c.dist),
+                                    Some(_) => None,
+                                });
+                                if let Some(overlap) = measured {
+                                    self.pair_states.insert(
+                                        (ch, ph),
+                                        PairState {
+                                            overlap,
+                                            odo_self,
+                                            odo_partner,
+                                        },
+                                    );
+                                    if overlap <= slop {
+                                        continue;
+                                    }
+                                }
+                            }
+                            let Some(config) = pair_configuration(
+                                &mut self.reconstructor,
+                                &self.hooks.meshes,
+                                &self.hooks.prev_poses,
+                                &world.bodies,
+                                &world.colliders,
+                                ph,
+                                Some(partner_pose),
+                                ch,
+                                Some(pose_now),
+                            ) else {
+                                continue;
+                            };
+                            // A pair that already overlapped when the step began has no first touch
+                            // on this step's path: it is measured along rapier's own contact normal
+                            // instead (its exit along -D can be far away).
+                            let along_normal = if config.on_trajectory || !config.needs_correction()
+                            {
+                                None
+                            } else {
+                                rapier_normal(world, ph, ch).and_then(|n| {
+                                    let mut rec = Reconstructor::new(ReconstructionOptions {
+                                        zero_motion_direction: Some(-n),
+                                        ..self.options.reconstruction
+                                    });
+                                    rec.reconstruct(
+                                        &partner_mesh,
+                                        &partner_pose,
+                                        &mesh,
+                                        &pose_now,
+                                        &pose_now,
+                                    )
+                                    .ok()
+                                })
+                            };
+                            (config, along_normal)
                         };
                         if pass == 0
                             && config.state != TouchState::Separated
@@ -566,25 +730,30 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 along_normal.as_ref().unwrap_or(&config),
                             ));
                         }
-                        let partner_dynamic = partner_body
-                            .and_then(|pb| world.bodies.get(pb))
-                            .is_some_and(|b| b.is_dynamic());
                         // A first touch on this step's own path is undone to first touch. A pair
                         // that already overlapped when the step began (a resting contact rapier
                         // is resolving) against a fixed or kinematic partner is only pushed
                         // back, along rapier's normal, to the resting slop when it got deeper;
                         // resting pairs of two dynamic bodies (a stack) are rapier's.
-                        let config = match (&along_normal, config.on_trajectory) {
+                        let on_path = config.on_trajectory && resting.is_none();
+                        // A resting contact is pushed back to the depth it had when the step
+                        // began (at least the resting slop): whatever got deeper than the
+                        // resting slop never gets deeper still, and rapier's steady overlap is
+                        // left alone.
+                        let target = resting.map_or(self.options.resting_slop, |r| {
+                            r.depth_at_start.max(self.options.resting_slop)
+                        });
+                        let config = match (&along_normal, on_path) {
                             (_, true) => config,
                             (Some(c), false)
-                                if c.depth > self.options.resting_slop && !partner_dynamic =>
+                                if c.depth > target + 0.1 * slop && !partner_dynamic =>
                             {
-                                let keep = self.options.resting_slop / c.depth;
+                                let keep = target / c.depth;
                                 let mut c = c.clone();
                                 c.reversing_vector *= 1.0 - keep;
                                 c.touch_pose.translation =
                                     pose_now.translation + c.reversing_vector;
-                                c.depth -= self.options.resting_slop;
+                                c.depth -= target;
                                 c
                             }
                             _ => continue,
@@ -676,6 +845,21 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     }
 }
 
+/// Where collider `co` is now: its body's pose times its offset (the guard moves bodies; their
+/// colliders follow only when it syncs them after its passes).
+fn collider_pose_now(
+    bodies: &rapier3d::dynamics::RigidBodySet,
+    co: &rapier3d::geometry::Collider,
+) -> Pose {
+    match (
+        co.parent().and_then(|pb| bodies.get(pb)),
+        co.position_wrt_parent(),
+    ) {
+        (Some(b), Some(rel)) => *b.position() * *rel,
+        _ => *co.position(),
+    }
+}
+
 /// How far a point of collider `co` can be from its body's origin: the offset to its parent
 /// plus its bounding radius (a turn by `θ` moves it by at most `θ` times this).
 fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
@@ -720,6 +904,81 @@ struct PairState {
     overlap: Real,
     odo_self: Real,
     odo_partner: Real,
+}
+
+/// rapier's contact manifold of a pair, read at the step's poses: the deepest of its contact
+/// points at the poses now and rapier's normal there (out of `partner` toward `mover`), and
+/// whether a point overlapped at the start of the step. The points are local to the colliders,
+/// so they are re-read at any pose as rapier's solver does; a recycled manifold (rapier keeps
+/// a pair's points while its relative pose drifts little) is read the same way.
+#[derive(Copy, Clone, Debug)]
+struct RapierContact {
+    depth: Real,
+    depth_at_start: Real,
+    normal: Vector,
+    overlapped_at_start: bool,
+}
+
+/// The [`RapierContact`] of a pair, `None` when rapier's manifolds hold no contact point for
+/// it. `*_prev` are the colliders' poses at the start of the step.
+fn rapier_contact(
+    world: &PhysicsWorld,
+    partner: ColliderHandle,
+    partner_poses: (&Pose, &Pose),
+    mover: ColliderHandle,
+    mover_poses: (&Pose, &Pose),
+) -> Option<RapierContact> {
+    let pair = world.narrow_phase.contact_pair(partner, mover)?;
+    rapier_contact_of(pair, partner, partner_poses, mover_poses)
+}
+
+/// [`rapier_contact`] of a pair at hand.
+fn rapier_contact_of(
+    pair: &rapier3d::geometry::ContactPair,
+    partner: ColliderHandle,
+    (partner_pose, partner_prev): (&Pose, &Pose),
+    (mover_pose, mover_prev): (&Pose, &Pose),
+) -> Option<RapierContact> {
+    let partner_first = pair.collider1 == partner;
+    let ((pos1, prev1), (pos2, prev2)) = if partner_first {
+        ((partner_pose, partner_prev), (mover_pose, mover_prev))
+    } else {
+        ((mover_pose, mover_prev), (partner_pose, partner_prev))
+    };
+    let mut overlapped_at_start = false;
+    let mut depth_at_start: Real = 0.0;
+    let mut deepest: Option<(Real, Vector)> = None;
+    for m in pair.manifolds() {
+        if m.points.is_empty() {
+            continue;
+        }
+        // The manifold's frames (a composite shape's part) at the poses now and at the start.
+        let frames = |a: &Pose, b: &Pose| {
+            let w1 = m.subshape_pos1().map_or(*a, |s| *a * *s);
+            let w2 = m.subshape_pos2().map_or(*b, |s| *b * *s);
+            (w1, w2, w1.rotation * m.local_n1)
+        };
+        let (w1, w2, n1) = frames(pos1, pos2);
+        let (v1, v2, m1) = frames(prev1, prev2);
+        for p in &m.points {
+            // Signed distances along collider 1's normal.
+            let before = (v2.transform_point(p.local_p2) - v1.transform_point(p.local_p1)).dot(m1);
+            overlapped_at_start |= before < 0.0;
+            depth_at_start = depth_at_start.max(-before);
+            let now = (w2.transform_point(p.local_p2) - w1.transform_point(p.local_p1)).dot(n1);
+            if deepest.is_none_or(|(best, _)| -now > best) {
+                deepest = Some((-now, n1));
+            }
+        }
+    }
+    let (depth, n1) = deepest?;
+    let normal = if partner_first { n1 } else { -n1 }.try_normalize()?;
+    depth.is_finite().then_some(RapierContact {
+        depth,
+        depth_at_start,
+        normal,
+        overlapped_at_start,
+    })
 }
 
 /// rapier's contact normal for the pair (from its deepest contact), oriented out of `fixed`

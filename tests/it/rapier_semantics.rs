@@ -245,3 +245,61 @@ fn collider_poses_and_ray_casts_see_the_corrected_pose() {
         assert!(corrected, "the guard never corrected the 60 m/s box");
     }
 }
+
+/// A body swung by a spherical joint (contacts disabled, as in rapier's ragdolls) through the
+/// fixed plate it hangs from: rapier never pairs jointed bodies whose joint disables contacts,
+/// so the guard must not stop it either. It ends where vanilla rapier puts it, in both modes.
+#[test]
+fn a_joint_with_contacts_disabled_lets_the_body_swing_through_its_anchor_plate() {
+    let run = |mode: Option<bool>| -> Vector {
+        let mut w = PhysicsWorld::default();
+        TouchPipeline::configure(&mut w.integration_parameters);
+        let flags = if mode == Some(true) {
+            ActiveHooks::MODIFY_SOLVER_CONTACTS
+        } else {
+            ActiveHooks::empty()
+        };
+        let anchor = w.insert_body(RigidBodyBuilder::fixed());
+        let plate = w.insert_collider(
+            ColliderBuilder::cuboid(2.5, 0.05, 2.5).active_hooks(flags),
+            Some(anchor),
+        );
+        let b = w.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, 2.0, 0.0))
+                .linvel(Vector::new(12.0, 0.0, 0.0)),
+        );
+        let bc = w.insert_collider(
+            ColliderBuilder::cuboid(0.2, 0.2, 0.2).active_hooks(flags),
+            Some(b),
+        );
+        let joint = SphericalJointBuilder::new()
+            .local_anchor1(Vector::ZERO)
+            .local_anchor2(Vector::new(0.0, -2.0, 0.0))
+            .contacts_enabled(false);
+        w.insert_impulse_joint(anchor, b, joint);
+        let mut touch = TouchPipeline::default();
+        if mode == Some(false) {
+            touch.track_collider(plate);
+            touch.track_collider(bc);
+        }
+        let mut crossed = false;
+        for _ in 0..40 {
+            match mode {
+                None => w.step(),
+                Some(_) => touch.step(&mut w),
+            }
+            crossed |= w.bodies[b].translation().y < -0.5;
+        }
+        assert!(crossed, "{mode:?}: the body never swung below the plate");
+        w.bodies[b].translation()
+    };
+    let vanilla = run(None);
+    for mode in [Some(true), Some(false)] {
+        let p = run(mode);
+        assert!(
+            (p - vanilla).length() < 1e-3,
+            "{mode:?}: {p:?}, vanilla {vanilla:?}"
+        );
+    }
+}
