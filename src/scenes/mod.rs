@@ -53,14 +53,24 @@ macro_rules! stepped_soft_scene {
 }
 
 mod ball_on_plate;
+mod compare;
 mod multi_tool;
 mod organ;
+mod stress;
 
 pub use ball_on_plate::BallOnPlateScene;
+pub use compare::{
+    compare_world, run_compare_side, u_prism, CompareMeasure, CompareScene, CompareWorld,
+    COMPARE_DROP_HEIGHT, COMPARE_FLOOR_HALF, COMPARE_SPIN, PLATE_HALF, SMALL_SCALE,
+};
 pub use multi_tool::{
     multi_tool_specs, tool_script, MultiTool, MultiToolScene, ToolPhase, ToolShape, ToolSpec,
 };
 pub use organ::{diverged, Fig7Organ, COMPARED_INTEGRATORS};
+pub use stress::{
+    deepest_solved_overlap, run_stress, stress_world, StressRun, StressScene, StressSide,
+    StressWorld,
+};
 
 /// Attaches `surface` (positions in world coordinates) to a new fixed body at the origin of
 /// `world`, in a new [`SurfaceSet`], with `substeps` surface steps per rigid step and a TriMesh

@@ -1,6 +1,7 @@
 //! One integration-test binary (links once): a module per layer and claim.
 
 mod common;
+mod compare_scenes;
 mod coupling;
 mod every_scale;
 mod fig4;
@@ -11,4 +12,5 @@ mod reconstruction_bad_input;
 mod reconstruction_properties;
 mod rigid_motion;
 mod spinning_drop;
+mod stress_scenes;
 mod surface;
