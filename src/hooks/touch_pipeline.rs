@@ -1,7 +1,7 @@
 //! [`TouchPipeline`]: one call that steps a rapier `PhysicsWorld` with the touch hooks, the
 //! step guard, the tools' proxies and the contact report.
 
-use super::pair_filter::rapier_solves_pair;
+use super::pair_filter::{rapier_solves_pair, user_removes_contact};
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
     body_motion, meshed_exactly, pair_configuration, previous_collider_pose, CachedMesh, TouchHooks,
@@ -83,8 +83,10 @@ struct Tool {
 ///    objects do not tunnel even with rapier's CCD off, and moving TriMesh bodies (which
 ///    rapier's CCD never sweeps) are guarded too. Only pairs rapier itself would solve are
 ///    corrected: a body passes sensors, colliders its collision or solver groups exclude,
-///    disabled colliders, pairs its `ActiveCollisionTypes` leave out and pairs your
-///    `filter_contact_pair` refuses, exactly as in vanilla rapier (tools ignore the collision
+///    disabled colliders, pairs its `ActiveCollisionTypes` leave out, bodies joined by a joint
+///    with contacts disabled, pairs your `filter_contact_pair` refuses and contacts your
+///    `modify_solver_contacts` removes (a one-way platform: the guard asks it on the first-touch
+///    contact before correcting), exactly as in vanilla rapier (tools ignore the collision
 ///    types only). The colliders of moved bodies and their broad-phase boxes are synced at
 ///    once, so collider poses and the query pipeline see the corrected poses after the step;
 /// 4. **tools:** a kinematic body registered with [`TouchPipeline::set_tool_target`] is put at
@@ -766,6 +768,21 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 && config.depth <= slop)
                         {
                             continue;
+                        }
+                        // Contacts the user's `modify_solver_contacts` removes (a one-way
+                        // platform passed from below) are not solved by rapier either.
+                        if let Some(patch) = config.patches.first() {
+                            if user_removes_contact(
+                                world,
+                                &self.hooks.inner,
+                                (a, b),
+                                ph,
+                                patch.normal,
+                                patch.center(),
+                                config.depth,
+                            ) {
+                                continue;
+                            }
                         }
                         let r = config.reversing_vector;
                         // (A translation keeps the current orientation exactly.)

@@ -4,7 +4,8 @@
 //! `filter_contact_pair` returning `None`, `ActiveCollisionTypes` that exclude dynamic-fixed
 //! pairs) ends exactly where vanilla rapier puts it, below the floor, in both opt-in modes (hook
 //! flags and `track_collider`); the plain floor stops it; and after a corrected step, collider
-//! poses and a query-pipeline ray cast see the corrected pose.
+//! poses and a query-pipeline ray cast see the corrected pose. Joints with contacts disabled
+//! and a one-way platform in the user's `modify_solver_contacts` are rapier's say too.
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -300,6 +301,85 @@ fn a_joint_with_contacts_disabled_lets_the_body_swing_through_its_anchor_plate()
         assert!(
             (p - vanilla).length() < 1e-3,
             "{mode:?}: {p:?}, vanilla {vanilla:?}"
+        );
+    }
+}
+
+/// rapier's one-way platform (its `one_way_platforms3` example): the user's
+/// `modify_solver_contacts` keeps only contacts whose normal points up out of the platform.
+struct OneWay {
+    platform: ColliderHandle,
+}
+
+impl PhysicsHooks for OneWay {
+    fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
+        let allowed = if context.collider1 == self.platform {
+            Vector::Y
+        } else {
+            -Vector::Y
+        };
+        context.update_as_oneway_platform(allowed, 0.1);
+    }
+}
+
+/// A body shot up through a one-way platform (slowly: it comes back down and lands on it; fast:
+/// it flies on) ends where vanilla rapier puts it, in both opt-in modes; dropped fast from
+/// above, it stops on the platform.
+#[test]
+fn a_one_way_platform_in_the_users_hooks_is_passed_from_below_only() {
+    let run = |start_y: f32, vy: f32, mode: Option<bool>| -> f32 {
+        let mut w = PhysicsWorld::default();
+        TouchPipeline::configure(&mut w.integration_parameters);
+        let hook = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+        // The platform needs the flag for the user's hooks in every mode.
+        let platform = w.insert_collider(
+            ColliderBuilder::cuboid(5.0, 0.05, 5.0).active_hooks(hook),
+            None,
+        );
+        let b = w.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, start_y, 0.0))
+                .linvel(Vector::new(0.0, vy, 0.0)),
+        );
+        let flags = if mode == Some(true) {
+            hook
+        } else {
+            ActiveHooks::empty()
+        };
+        let bc = w.insert_collider(
+            ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(flags),
+            Some(b),
+        );
+        let hooks = OneWay { platform };
+        let mut touch = TouchPipeline::new(OneWay { platform });
+        if mode == Some(false) {
+            touch.track_collider(bc);
+        }
+        for _ in 0..150 {
+            match mode {
+                None => w.step_with_events(&hooks, &()),
+                Some(_) => touch.step(&mut w),
+            }
+        }
+        w.bodies[b].translation().y
+    };
+    for (start_y, vy) in [(-1.0, 6.0), (-1.0, 60.0)] {
+        let vanilla = run(start_y, vy, None);
+        // Slow: back down and resting on top; fast: far above.
+        assert!(vanilla > 0.25, "vanilla ended at {vanilla}");
+        for mode in [Some(true), Some(false)] {
+            let y = run(start_y, vy, mode);
+            assert!(
+                (y - vanilla).abs() <= 2e-3 * vanilla.abs().max(1.0),
+                "{vy} m/s {mode:?}: {y}, vanilla {vanilla}"
+            );
+        }
+    }
+    for mode in [Some(true), Some(false)] {
+        let y = run(3.0, -60.0, mode);
+        assert!(
+            y > 0.25 && y < 0.35,
+            "{mode:?}: dropped from above ended at {y}"
         );
     }
 }
