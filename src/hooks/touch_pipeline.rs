@@ -39,6 +39,17 @@ pub struct TouchOptions {
     pub resting_slop: Real,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,
+    /// Manage the `ActiveHooks::MODIFY_SOLVER_CONTACTS` flag of the colliders opted in with
+    /// it: the pipeline remembers them, clears the flag, and raises it after a step only on
+    /// the colliders whose body moved more than rapier's prediction distance during it (a
+    /// slower body meets nothing rapier's speculative contacts did not see coming, and the
+    /// guard corrects poses anyway). rapier never recycles the contacts
+    /// of a pair with a hook flag (its narrow phase recomputes them every step), so a resting
+    /// pile with the flag everywhere costs rapier itself about 1.7×. `false` in
+    /// [`TouchPipeline::new`] (your hooks may need the flag on every manifold: a one-way
+    /// platform), `true` in `TouchPipeline::default()` (no hooks of yours). With it on,
+    /// [`TouchPipeline::untrack_collider`] also lets go of a flagged collider.
+    pub hook_flags_on_demand: bool,
     /// Reconstruct and report touching pairs too. Default `false`: the guard then skips pairs
     /// that can neither have tunneled (relative step shorter than the safe step length) nor
     /// penetrate deeper than the slop (parry's contact query), and reports only the pairs it
@@ -55,6 +66,7 @@ impl Default for TouchOptions {
             resting_slop: 9.0e-4,
             correct_poses: true,
             max_passes: 3,
+            hook_flags_on_demand: false,
             report_touching: false,
             reconstruction: ReconstructionOptions::default(),
         }
@@ -133,14 +145,21 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     corrections: usize,
     odometers: HashMap<RigidBodyHandle, Real>,
     tracked: HashSet<ColliderHandle>,
+    /// Colliders opted in with the hook flag while the pipeline manages it
+    /// ([`TouchOptions::hook_flags_on_demand`]).
+    hooked: HashSet<ColliderHandle>,
     pair_states: HashMap<(ColliderHandle, ColliderHandle), PairState>,
     /// Opted-in colliders whose shape has no touch mesh: the shape's address and why.
     refused: HashMap<ColliderHandle, (usize, TouchMeshError)>,
 }
 
 impl Default for TouchPipeline<()> {
+    /// A pipeline with no hooks of yours, managing the hook flags
+    /// ([`TouchOptions::hook_flags_on_demand`]).
     fn default() -> Self {
-        Self::new(())
+        let mut pipeline = Self::new(());
+        pipeline.options.hook_flags_on_demand = true;
+        pipeline
     }
 }
 
@@ -164,6 +183,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             corrections: 0,
             odometers: HashMap::new(),
             tracked: HashSet::new(),
+            hooked: HashSet::new(),
             pair_states: HashMap::new(),
             refused: HashMap::new(),
         }
@@ -213,6 +233,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// Stops tracking `collider` (see [`TouchPipeline::track_collider`]).
     pub fn untrack_collider(&mut self, collider: ColliderHandle) {
         self.tracked.remove(&collider);
+        self.hooked.remove(&collider);
     }
 
     /// Drives kinematic body `body` as a tool toward `device` (a mouse or haptic device pose).
@@ -290,13 +311,26 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// Builds (or drops) the touch meshes of opted-in colliders.
     fn refresh_meshes(&mut self, colliders: &ColliderSet) {
         self.tracked.retain(|h| colliders.contains(*h));
-        self.refused.retain(|h, _| {
-            colliders.get(*h).is_some_and(|co| {
-                co.active_hooks()
+        self.hooked.retain(|h| colliders.contains(*h));
+        if self.options.hook_flags_on_demand {
+            for (h, co) in colliders.iter() {
+                if co
+                    .active_hooks()
                     .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
-                    || self.tracked.contains(h)
-            })
-        });
+                {
+                    self.hooked.insert(h);
+                }
+            }
+        }
+        let (tracked, hooked) = (&self.tracked, &self.hooked);
+        let opted_in = |h: &ColliderHandle, co: &rapier3d::geometry::Collider| {
+            co.active_hooks()
+                .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+                || tracked.contains(h)
+                || hooked.contains(h)
+        };
+        self.refused
+            .retain(|h, _| colliders.get(*h).is_some_and(|co| opted_in(h, co)));
         let meshes = &mut self.hooks.meshes;
         meshes.retain(|h, _| colliders.contains(*h));
         // Colliders sharing one shape (rapier's `SharedShape` is an `Arc`) share one mesh.
@@ -305,11 +339,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             .map(|m| (m.shape_ptr, m.mesh.clone()))
             .collect();
         for (h, co) in colliders.iter() {
-            if !co
-                .active_hooks()
-                .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
-                && !self.tracked.contains(&h)
-            {
+            if !opted_in(&h, co) {
                 meshes.remove(&h);
                 continue;
             }
@@ -859,6 +889,50 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             }
         }
         sync_moved_colliders(world, &mut moved_bodies);
+        self.sync_hook_flags(world);
+    }
+
+    /// With [`TouchOptions::hook_flags_on_demand`]: raises the hook flag on the managed
+    /// colliders whose body moved more than rapier's prediction distance (and the slop) over
+    /// this step (translation plus the arc of its rotation), clears it on the others.
+    fn sync_hook_flags(&mut self, world: &mut PhysicsWorld) {
+        if !self.options.hook_flags_on_demand {
+            return;
+        }
+        // A body that moved less than rapier's prediction distance met nothing rapier had not
+        // already seen coming (its speculative contacts); the guard corrects the others, so the
+        // hooks only matter for the fast ones.
+        let slop = self
+            .options
+            .penetration_slop
+            .max(world.integration_parameters.prediction_distance());
+        for h in &self.hooked {
+            let Some(co) = world.colliders.get(*h) else {
+                continue;
+            };
+            let moved = co.parent().is_some_and(|bh| {
+                match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
+                    (Some(b), Some(prev)) => {
+                        let now = b.position();
+                        (now.translation - prev.translation).length()
+                            + prev.rotation.angle_between(now.rotation) * collider_reach(co)
+                            > slop
+                    }
+                    _ => false,
+                }
+            });
+            let flags = co.active_hooks();
+            let want = if moved {
+                flags | ActiveHooks::MODIFY_SOLVER_CONTACTS
+            } else {
+                flags - ActiveHooks::MODIFY_SOLVER_CONTACTS
+            };
+            if want != flags {
+                if let Some(co) = world.colliders.get_mut(*h) {
+                    co.set_active_hooks(want);
+                }
+            }
+        }
     }
 }
 
