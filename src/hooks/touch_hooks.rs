@@ -65,9 +65,10 @@ pub struct HookCounters {
 /// `ActiveHooks::MODIFY_SOLVER_CONTACTS`. For such a manifold, when rapier finds a solver
 /// contact deeper than the slop but no deeper than the two bodies travelled over the previous
 /// step (deeper, the pair already overlapped before it: a resting contact rapier is resolving),
-/// and both colliders are polyhedra (cuboids, convex polyhedra, triangle meshes, height
-/// fields, voxels: a curved shape's touch mesh is a tessellation and rapier's own contacts on
-/// it are exact), it reconstructs the pair along its relative motion over the previous step
+/// and both colliders are single polyhedra (cuboids, convex polyhedra: a curved shape's touch
+/// mesh is a tessellation and rapier's own contacts on it are exact; a triangle mesh, a height
+/// field or a compound gets one manifold per part, which one first-touch patch cannot stand
+/// for), it reconstructs the pair along its relative motion over the previous step
 /// (from the pose history the pipeline records), then:
 /// - **penetrating deeper than the slop or perforated, first touch on the last step's path:**
 ///   sets the manifold normal to the first-touch patch normal and, for each solver contact,
@@ -328,7 +329,23 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
         // rapier's contacts on a curved shape (a ball, a capsule, a rounded shape) are exact
         // where its touch mesh is a tessellation: only pairs of polyhedra are rewritten.
         let exact = |c| self.meshes.get(&c).map(|m| m.exact);
-        let config = if deep && exact(c1) == Some(true) && exact(c2) == Some(true) {
+        // A composite shape (a triangle mesh, a height field, a compound) gets one manifold per
+        // part from rapier: one first-touch patch cannot stand for all of them (rewriting them
+        // put bodies through a bumpy TriMesh floor in rapier's `trimesh3` stress scene).
+        let single = |c| {
+            context
+                .colliders
+                .get(c)
+                .is_some_and(|co: &rapier3d::geometry::Collider| {
+                    co.shape().as_composite_shape().is_none()
+                })
+        };
+        let config = if deep
+            && exact(c1) == Some(true)
+            && exact(c2) == Some(true)
+            && single(c1)
+            && single(c2)
+        {
             self.reconstruct_pair(context.bodies, context.colliders, c1, c2)
         } else {
             None

@@ -223,9 +223,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
     /// Guards and reports `collider` without rapier hooks. Colliders with
     /// `ActiveHooks::MODIFY_SOLVER_CONTACTS` are guarded anyway and also get their manifolds
-    /// rewritten; but rapier never recycles the contacts of a pair with active hooks (1.72x its
-    /// step time with 100 boxes on a TriMesh floor, see the README), so colliders that only need
-    /// the step guard, the tool proxies and the reports are cheaper tracked this way.
+    /// rewritten; rapier never recycles the contacts of a pair with active hooks (1.4-1.7x its
+    /// step time with 100 boxes on a TriMesh floor, see the README), which
+    /// [`TouchOptions::hook_flags_on_demand`] avoids by raising the flag only on fast bodies.
+    /// Tracking needs no flag at all.
     pub fn track_collider(&mut self, collider: ColliderHandle) {
         self.tracked.insert(collider);
     }
