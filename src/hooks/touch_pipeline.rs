@@ -819,10 +819,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // (A translation keeps the current orientation exactly.)
                         let turned = config.touch_pose.rotation != pose_now.rotation;
                         let n = config.patches.first().map(|p| p.normal);
-                        // Split the correction by inverse mass when the partner is dynamic too.
+                        // Split the correction by inverse mass when the partner is dynamic
+                        // too, unless the partner rests on a fixed or kinematic collider: its
+                        // share would push it into what supports it (seen: a thin dynamic plate
+                        // pushed 2.25 mm into the floor under it). The moving body then takes
+                        // it all, walked back along its own path as in the paper.
                         let partner_mass = partner_body
                             .and_then(|pb| world.bodies.get(pb))
                             .filter(|b| b.is_dynamic())
+                            .filter(|_| !supported(world, ph))
                             .map(|b| b.mass());
                         let own_mass = world.bodies.get(bh).map_or(1.0, |b| b.mass());
                         let share = match partner_mass {
@@ -935,6 +940,24 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             }
         }
     }
+}
+
+/// Whether collider `c` has a contact with a fixed or kinematic collider in rapier's narrow
+/// phase (a body resting on the floor).
+fn supported(world: &PhysicsWorld, c: ColliderHandle) -> bool {
+    world.narrow_phase.contact_pairs_with(c).any(|p| {
+        let other = if p.collider1 == c {
+            p.collider2
+        } else {
+            p.collider1
+        };
+        p.has_any_active_contact()
+            && world.colliders.get(other).is_some_and(|co| {
+                co.parent()
+                    .and_then(|b| world.bodies.get(b))
+                    .is_none_or(|b| !b.is_dynamic())
+            })
+    })
 }
 
 /// Where collider `co` is now: its body's pose times its offset (the guard moves bodies; their

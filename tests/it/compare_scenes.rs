@@ -123,13 +123,9 @@ fn measure_run(scene: CompareScene, speed: f32, touch: bool) -> Measured {
 }
 
 /// The bound the touch side must keep in `scene`: 1 mm, and 2 % of the box at 1/100 scale.
-/// Known gap (issue 12 stays open): the box's impact presses the *dynamic* plate 2.25 mm into
-/// the fixed floor within one step and the guard does not yet push it back (the box itself
-/// stops on the plate); that scene is held to 2.5 mm, against rapier's 12-17 mm.
 fn bound(scene: CompareScene) -> f32 {
     match scene {
         CompareScene::SmallScale => 0.02 * 0.5 * scene.scale(),
-        CompareScene::DynamicPlate => 2.5e-3,
         _ => 1e-3,
     }
 }
