@@ -1,0 +1,621 @@
+//! The step guard of [`TouchPipeline`]: after rapier's step, moves bodies that penetrate (or
+//! went through something) back to first touch, and keeps the hook flags of fast bodies.
+
+use super::rapier_contacts::{
+    collider_pose_now, rapier_contact, rapier_contact_of, rapier_normal, supported,
+};
+use super::*;
+
+impl<H: PhysicsHooks> TouchPipeline<H> {
+    /// The step guard: moves bodies that penetrate (or went through something) back to first
+    /// touch, and records the reports.
+    ///
+    /// A calm pile costs little: rapier's own contact points (computed at the step's start,
+    /// local to the colliders) are re-read at the poses now, as rapier's solver does, and say
+    /// whether a pair already overlapped when the step began and how deep it is now. They are
+    /// trusted while the pair moved less than rapier's prediction distance (they hold every
+    /// feature pair within it), and for curved shapes (rapier's contacts are exact there; the
+    /// touch mesh is a tessellation). A body that moved less than half the slop is skipped
+    /// against fixed and dynamic partners (a dynamic partner that moved checks the pair).
+    ///
+    /// Work is bounded three ways. A body slower than its safe step length cannot have tunneled,
+    /// so only the partners rapier's narrow phase already pairs it with are looked at (a swept
+    /// box query otherwise). A pair whose last measured overlap plus the distance both bodies
+    /// travelled since (their odometers) stays under the slop is skipped. Other pairs get
+    /// parry's contact query, and a reconstruction only when it finds them deeper than the slop
+    /// (or when parry has no query for the shapes, such as TriMesh against TriMesh).
+    pub(super) fn guard(&mut self, world: &mut PhysicsWorld) {
+        let passes = if self.options.correct_poses {
+            self.options.max_passes.max(1)
+        } else {
+            1
+        };
+        let slop = self.options.penetration_slop;
+        let prediction = world.integration_parameters.prediction_distance();
+        // Odometers: distance every point of each moving body may have travelled.
+        for (h, b) in world.bodies.iter() {
+            let Some(prev) = self.hooks.prev_poses.get(&h) else {
+                continue;
+            };
+            let pose = b.position();
+            let radius = b
+                .colliders()
+                .iter()
+                .filter_map(|c| world.colliders.get(*c))
+                .map(collider_reach)
+                .fold(0.0, Real::max);
+            let step = (pose.translation - prev.translation).length()
+                + prev.rotation.angle_between(pose.rotation) * radius;
+            if step > 0.0 && step.is_finite() {
+                *self.odometers.entry(h).or_insert(0.0) += step;
+            }
+        }
+        self.odometers.retain(|h, _| world.bodies.contains(*h));
+        self.pair_states
+            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
+
+        let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::new();
+        let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
+        let mut moved_before = 0;
+        for pass in 0..passes {
+            let mut moved = false;
+            // Later passes look again only at the bodies the previous pass moved (a correction
+            // can push a body into a third one).
+            let movers: Vec<RigidBodyHandle> = if pass == 0 {
+                world
+                    .bodies
+                    .iter()
+                    .filter(|(h, b)| {
+                        (b.is_dynamic() || self.tools.contains_key(h))
+                            && !b.is_sleeping()
+                            && b.colliders()
+                                .iter()
+                                .any(|c| self.hooks.meshes.contains_key(c))
+                    })
+                    .map(|(h, _)| h)
+                    .collect()
+            } else {
+                let mut m = moved_bodies[moved_before..].to_vec();
+                m.sort_unstable_by_key(|h| h.into_raw_parts());
+                m.dedup();
+                m
+            };
+            moved_before = moved_bodies.len();
+            for bh in movers {
+                let Some(body) = world.bodies.get(bh) else {
+                    continue;
+                };
+                let body_pose = *body.position();
+                let d = body_motion(&self.hooks.prev_poses, &world.bodies, Some(bh));
+                let is_tool = self.tools.contains_key(&bh);
+                let own: Vec<ColliderHandle> = body.colliders().to_vec();
+                for ch in own {
+                    let mesh_exact = self.hooks.meshes.get(&ch).is_some_and(|m| m.exact);
+                    let Some(mesh) = self.hooks.meshes.get(&ch).map(|m| m.mesh.clone()) else {
+                        continue;
+                    };
+                    let Some(co) = world.colliders.get(ch) else {
+                        continue;
+                    };
+                    let co_rel = co.position_wrt_parent().copied();
+                    let pose_now = co_rel.map_or(*co.position(), |rel| body_pose * rel);
+                    let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
+                    // How far a point of the collider may have travelled: translation plus the
+                    // arc of its rotation.
+                    let turn =
+                        prev_pose.rotation.angle_between(pose_now.rotation) * collider_reach(co);
+                    let fast = d.length() + turn >= mesh.min_extent().min(prediction);
+                    // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
+                    // (rapier's default collision types): always query them.
+                    let partners: Vec<ColliderHandle> = if fast || pass > 0 || is_tool {
+                        let swept = co
+                            .shape()
+                            .compute_aabb(&pose_now)
+                            .merged(&co.shape().compute_aabb(&prev_pose))
+                            .loosened(turn);
+                        world
+                            .intersect_aabb_conservative(swept, QueryFilter::default())
+                            .map(|(h, _)| h)
+                            .collect()
+                    } else {
+                        // A slow body: only rapier's pairs, and among them only those its own
+                        // contact points (re-read at the poses now) do not show calm.
+                        // A body that moved less than half the slop changes a pair's depth by
+                        // less than the slop unless its partner moved too: a fixed partner did
+                        // not, and a dynamic one that did checks the pair from its side.
+                        let still =
+                            !self.options.report_touching && d.length() + turn <= 0.5 * slop;
+                        let mut calm_skipped = Vec::new();
+                        for p in world.narrow_phase.contact_pairs_with(ch) {
+                            let ph = if p.collider1 == ch {
+                                p.collider2
+                            } else {
+                                p.collider1
+                            };
+                            let Some(partner) = world.colliders.get(ph) else {
+                                continue;
+                            };
+                            if still
+                                && partner
+                                    .parent()
+                                    .and_then(|pb| world.bodies.get(pb))
+                                    .is_none_or(|b| !b.is_kinematic())
+                            {
+                                continue;
+                            }
+                            let partner_pose = collider_pose_now(&world.bodies, partner);
+                            let partner_prev = previous_collider_pose(
+                                &self.hooks.prev_poses,
+                                partner,
+                                partner_pose,
+                            );
+                            let travel = (d - body_motion(
+                                &self.hooks.prev_poses,
+                                &world.bodies,
+                                partner.parent(),
+                            ))
+                            .length()
+                                + turn
+                                + partner_prev.rotation.angle_between(partner_pose.rotation)
+                                    * collider_reach(partner);
+                            // rapier's points hold every feature pair within its prediction
+                            // distance at the step's start: they still tell the depth when
+                            // the pair moved less than that.
+                            let rc = rapier_contact_of(
+                                p,
+                                ph,
+                                (&partner_pose, &partner_prev),
+                                (&pose_now, &prev_pose),
+                            );
+                            let trusted = travel <= prediction
+                                || !(mesh_exact
+                                    && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact));
+                            let partner_dynamic = partner
+                                .parent()
+                                .and_then(|pb| world.bodies.get(pb))
+                                .is_some_and(|b| b.is_dynamic());
+                            let calm = match &rc {
+                                Some(r) if r.overlapped_at_start => {
+                                    partner_dynamic
+                                        || (trusted && r.depth <= self.options.resting_slop)
+                                }
+                                Some(r) => {
+                                    !self.options.report_touching && trusted && r.depth <= slop
+                                }
+                                None => !self.options.report_touching && travel <= slop,
+                            };
+                            if !calm {
+                                calm_skipped.push(ph);
+                            }
+                        }
+                        calm_skipped
+                    };
+                    for ph in partners {
+                        let Some(partner) = world.colliders.get(ph) else {
+                            continue;
+                        };
+                        if ph == ch || partner.parent() == Some(bh) {
+                            continue;
+                        }
+                        // Only pairs rapier itself would solve (sensors, groups, disabled
+                        // colliders, collision types and the user's pair filter are rapier's
+                        // say), asked in rapier's own pair order when it has the pair.
+                        let (a, b) = world
+                            .narrow_phase
+                            .contact_pair(ph, ch)
+                            .map_or((ph, ch), |p| (p.collider1, p.collider2));
+                        if !rapier_solves_pair(
+                            &world.bodies,
+                            &world.colliders,
+                            (&world.impulse_joints, &world.multibody_joints),
+                            &self.hooks.inner,
+                            a,
+                            b,
+                            is_tool,
+                        ) {
+                            continue;
+                        }
+                        let Some(partner_mesh) = self.hooks.meshes.get(&ph).map(|m| m.mesh.clone())
+                        else {
+                            continue;
+                        };
+                        let partner_pose = collider_pose_now(&world.bodies, partner);
+                        let partner_body = partner.parent();
+                        let partner_dynamic = partner_body
+                            .and_then(|pb| world.bodies.get(pb))
+                            .is_some_and(|b| b.is_dynamic());
+                        // A pair rapier's manifold shows overlapping when the step began is a
+                        // resting contact rapier is resolving: no first touch on this step's
+                        // path. Pairs of two dynamic bodies (a stack) are rapier's; against a
+                        // fixed or kinematic partner, only a pair now deeper than the resting
+                        // slop is measured (along rapier's normal) and pushed back. Nothing is
+                        // reconstructed for the resting pairs of a calm pile.
+                        let partner_prev =
+                            previous_collider_pose(&self.hooks.prev_poses, partner, partner_pose);
+                        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner_body);
+                        let travel = (d - dp).length()
+                            + turn
+                            + partner_prev.rotation.angle_between(partner_pose.rotation)
+                                * collider_reach(partner);
+                        // rapier's contact points say whether the pair overlapped when the
+                        // step began. Their depth now is trusted while the pair moved less
+                        // than rapier's prediction distance (they hold every feature pair
+                        // within it at the step's start; a spinning body brings new corners
+                        // in).
+                        let rapier = rapier_contact(
+                            world,
+                            ph,
+                            (&partner_pose, &partner_prev),
+                            ch,
+                            (&pose_now, &prev_pose),
+                        );
+                        // A curved shape's contacts are rapier's exact ones (its touch mesh is
+                        // a tessellation): they are trusted at any travel.
+                        let trusted = travel <= prediction
+                            || !(mesh_exact && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact));
+                        let overlapped = rapier.is_some_and(|r| r.overlapped_at_start);
+                        if partner_dynamic && overlapped {
+                            continue;
+                        }
+                        // (A pair that moved farther is measured on its own path below.)
+                        let resting = rapier.filter(|_| overlapped && trusted);
+                        if let Some(r) = &resting {
+                            // Within the resting slop: rapier's.
+                            if r.depth <= self.options.resting_slop {
+                                continue;
+                            }
+                        }
+                        let odo = |h: Option<RigidBodyHandle>| {
+                            h.and_then(|h| self.odometers.get(&h).copied())
+                                .unwrap_or(0.0)
+                        };
+                        let (odo_self, odo_partner) = (odo(Some(bh)), odo(partner_body));
+                        let (config, along_normal) = if let Some(r) = &resting {
+                            let mut rec = Reconstructor::new(ReconstructionOptions {
+                                zero_motion_direction: Some(-r.normal),
+                                ..self.options.reconstruction
+                            });
+                            let Ok(c) = rec.reconstruct(
+                                &partner_mesh,
+                                &partner_pose,
+                                &mesh,
+                                &pose_now,
+                                &pose_now,
+                            ) else {
+                                continue;
+                            };
+                            (c.clone(), Some(c))
+                        } else {
+                            let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
+                                (a, b) if b > 0.0 => a.min(b),
+                                (a, _) => a,
+                            };
+                            let may_tunnel = (d - dp).length() >= safe;
+                            if !self.options.report_touching && !may_tunnel {
+                                // A slow pair: rapier's own contact points, re-read at the poses
+                                // now, say how deep it is; with no points rapier found it apart
+                                // (beyond its prediction distance) when the step began, so it can
+                                // be no deeper than the pair's relative travel.
+                                let bound = match rapier {
+                                    Some(r) if trusted => r.depth,
+                                    _ => travel,
+                                };
+                                if bound <= slop {
+                                    continue;
+                                }
+                            }
+                            // A pair rapier has contact points for, but that moved too far to
+                            // read them, is reconstructed: parry's contact query is not asked
+                            // (it answered wrongly for a 4 m plate lying on a 100 m floor).
+                            if !self.options.report_touching && !may_tunnel && rapier.is_none() {
+                                // Skip pairs whose overlap cannot have grown past the slop.
+                                if let Some(st) = self.pair_states.get(&(ch, ph)) {
+                                    let bound = st.overlap
+                                        + (odo_self - st.odo_self)
+                                        + (odo_partner - st.odo_partner);
+                                    if bound <= slop {
+                                        continue;
+                                    }
+                                }
+                                // With a prediction of 0 parry answers `None` for separated
+                                // shapes; a contact with a positive distance is one of its wrong
+                                // answers (seen for a small tumbling cuboid on a large one: +1.1 mm
+                                // where a corner was 1.1 mm deep). Such pairs are reconstructed.
+                                let measured = parry3d::query::contact(
+                                    &partner_pose,
+                                    partner.shape(),
+                                    &pose_now,
+                                    co.shape(),
+                                    0.0,
+                                )
+                                .ok()
+                                .and_then(|c| match c {
+                                    None => Some(0.0),
+                                    Some(c) if c.dist <= 0.0 => Some(-c.dist),
+                                    Some(_) => None,
+                                });
+                                if let Some(overlap) = measured {
+                                    self.pair_states.insert(
+                                        (ch, ph),
+                                        PairState {
+                                            overlap,
+                                            odo_self,
+                                            odo_partner,
+                                        },
+                                    );
+                                    if overlap <= slop {
+                                        continue;
+                                    }
+                                }
+                            }
+                            let Some(config) = pair_configuration(
+                                &mut self.reconstructor,
+                                &self.hooks.meshes,
+                                &self.hooks.prev_poses,
+                                &world.bodies,
+                                &world.colliders,
+                                ph,
+                                Some(partner_pose),
+                                ch,
+                                Some(pose_now),
+                            ) else {
+                                continue;
+                            };
+                            // A pair that already overlapped when the step began has no first touch
+                            // on this step's path: it is measured along rapier's own contact normal
+                            // instead (its exit along -D can be far away).
+                            let along_normal = if config.on_trajectory || !config.needs_correction()
+                            {
+                                None
+                            } else {
+                                rapier_normal(world, ph, ch).and_then(|n| {
+                                    let mut rec = Reconstructor::new(ReconstructionOptions {
+                                        zero_motion_direction: Some(-n),
+                                        ..self.options.reconstruction
+                                    });
+                                    rec.reconstruct(
+                                        &partner_mesh,
+                                        &partner_pose,
+                                        &mesh,
+                                        &pose_now,
+                                        &pose_now,
+                                    )
+                                    .ok()
+                                })
+                            };
+                            (config, along_normal)
+                        };
+                        if pass == 0
+                            && config.state != TouchState::Separated
+                            && reported.insert((ph, ch))
+                        {
+                            self.reports.push(PairReport::new(
+                                ph,
+                                ch,
+                                along_normal.as_ref().unwrap_or(&config),
+                            ));
+                        }
+                        // A first touch on this step's own path is undone to first touch. A pair
+                        // that already overlapped when the step began (a resting contact rapier
+                        // is resolving) against a fixed or kinematic partner is only pushed
+                        // back, along rapier's normal, to the resting slop when it got deeper;
+                        // resting pairs of two dynamic bodies (a stack) are rapier's.
+                        let on_path = config.on_trajectory && resting.is_none();
+                        // A resting contact is pushed back to the depth it had when the step
+                        // began (at least the resting slop): whatever got deeper than the
+                        // resting slop never gets deeper still, and rapier's steady overlap is
+                        // left alone.
+                        let target = resting.map_or(self.options.resting_slop, |r| {
+                            r.depth_at_start.max(self.options.resting_slop)
+                        });
+                        let config = match (&along_normal, on_path) {
+                            (_, true) => config,
+                            (Some(c), false)
+                                if c.depth > target + 0.1 * slop && !partner_dynamic =>
+                            {
+                                let keep = target / c.depth;
+                                let mut c = c.clone();
+                                c.reversing_vector *= 1.0 - keep;
+                                c.touch_pose.translation =
+                                    pose_now.translation + c.reversing_vector;
+                                c.depth -= target;
+                                c
+                            }
+                            _ => continue,
+                        };
+                        // (A resting push is already net of its slop.)
+                        if !self.options.correct_poses
+                            || !config.needs_correction()
+                            || (config.on_trajectory
+                                && config.state == TouchState::Penetrating
+                                && config.depth <= slop)
+                        {
+                            continue;
+                        }
+                        // Contacts the user's `modify_solver_contacts` removes (a one-way
+                        // platform passed from below) are not solved by rapier either.
+                        if let Some(patch) = config.patches.first() {
+                            if user_removes_contact(
+                                world,
+                                &self.hooks.inner,
+                                (a, b),
+                                ph,
+                                patch.normal,
+                                patch.center(),
+                                config.depth,
+                            ) {
+                                continue;
+                            }
+                        }
+                        let r = config.reversing_vector;
+                        // (A translation keeps the current orientation exactly.)
+                        let turned = config.touch_pose.rotation != pose_now.rotation;
+                        let n = config.patches.first().map(|p| p.normal);
+                        // Split the correction by inverse mass when the partner is dynamic
+                        // too, unless the partner rests on a fixed or kinematic collider: its
+                        // share would push it into what supports it (seen: a thin dynamic plate
+                        // pushed 2.25 mm into the floor under it). The moving body then takes
+                        // it all, walked back along its own path as in the paper.
+                        let partner_mass = partner_body
+                            .and_then(|pb| world.bodies.get(pb))
+                            .filter(|b| b.is_dynamic())
+                            .filter(|_| !supported(world, ph))
+                            .map(|b| b.mass());
+                        let own_mass = world.bodies.get(bh).map_or(1.0, |b| b.mass());
+                        let share = match partner_mass {
+                            Some(mp) if mp > 0.0 && own_mass > 0.0 => {
+                                (1.0 / own_mass) / (1.0 / own_mass + 1.0 / mp)
+                            }
+                            _ => 1.0,
+                        };
+                        if let Some(b) = world.bodies.get_mut(bh) {
+                            if turned {
+                                // A rotating path: the body goes to its pose at first touch
+                                // (its share of the way when the partner moves too).
+                                let rel = co_rel.unwrap_or(Pose::IDENTITY);
+                                let target = config.touch_pose * rel.inverse();
+                                let now = *b.position();
+                                let p = Pose::from_parts(
+                                    now.translation.lerp(target.translation, share),
+                                    now.rotation.slerp(target.rotation, share),
+                                );
+                                if p.is_finite() {
+                                    b.set_position(p, true);
+                                }
+                            } else {
+                                let t = b.translation() + r * share;
+                                if t.is_finite() {
+                                    b.set_translation(t, true);
+                                }
+                            }
+                            if let Some(n) = n {
+                                // n points out of the partner toward this body: remove the
+                                // velocity into the partner (inelastic).
+                                let v = b.linvel();
+                                let vn = v.dot(n);
+                                if vn < 0.0 && b.is_dynamic() {
+                                    b.set_linvel(v - vn * n, true);
+                                }
+                            }
+                        }
+                        moved_bodies.push(bh);
+                        if let (Some(pb), true) = (partner_body, share < 1.0) {
+                            moved_bodies.push(pb);
+                            if let Some(b) = world.bodies.get_mut(pb) {
+                                let t = b.translation() - r * (1.0 - share);
+                                if t.is_finite() {
+                                    b.set_translation(t, true);
+                                }
+                            }
+                        }
+                        self.pair_states.insert(
+                            (ch, ph),
+                            PairState {
+                                overlap: 0.0,
+                                odo_self,
+                                odo_partner,
+                            },
+                        );
+                        moved = true;
+                        self.corrections += 1;
+                        break;
+                    }
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        sync_moved_colliders(world, &mut moved_bodies);
+        self.sync_hook_flags(world);
+    }
+
+    /// With [`TouchOptions::hook_flags_on_demand`]: raises the hook flag on the managed
+    /// colliders whose body moved more than rapier's prediction distance (and the slop) over
+    /// this step (translation plus the arc of its rotation), clears it on the others.
+    fn sync_hook_flags(&mut self, world: &mut PhysicsWorld) {
+        if !self.options.hook_flags_on_demand {
+            return;
+        }
+        // A body that moved less than rapier's prediction distance met nothing rapier had not
+        // already seen coming (its speculative contacts); the guard corrects the others, so the
+        // hooks only matter for the fast ones.
+        let slop = self
+            .options
+            .penetration_slop
+            .max(world.integration_parameters.prediction_distance());
+        for h in &self.hooked {
+            let Some(co) = world.colliders.get(*h) else {
+                continue;
+            };
+            let moved = co.parent().is_some_and(|bh| {
+                match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
+                    (Some(b), Some(prev)) => {
+                        let now = b.position();
+                        (now.translation - prev.translation).length()
+                            + prev.rotation.angle_between(now.rotation) * collider_reach(co)
+                            > slop
+                    }
+                    _ => false,
+                }
+            });
+            let flags = co.active_hooks();
+            let want = if moved {
+                flags | ActiveHooks::MODIFY_SOLVER_CONTACTS
+            } else {
+                flags - ActiveHooks::MODIFY_SOLVER_CONTACTS
+            };
+            if want != flags {
+                if let Some(co) = world.colliders.get_mut(*h) {
+                    co.set_active_hooks(want);
+                }
+            }
+        }
+    }
+}
+
+/// How far a point of collider `co` can be from its body's origin: the offset to its parent
+/// plus its bounding radius (a turn by `θ` moves it by at most `θ` times this).
+fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
+    co.position_wrt_parent()
+        .map_or(0.0, |p| p.translation.length())
+        + co.shape().compute_local_bounding_sphere().radius
+}
+
+/// Puts the colliders of the bodies the guard moved where their bodies now are, and their
+/// broad-phase boxes with them, so renderers, ray casts and the query pipeline see the
+/// corrected poses right after the step (rapier would only sync them at the next step).
+fn sync_moved_colliders(world: &mut PhysicsWorld, moved: &mut Vec<RigidBodyHandle>) {
+    if moved.is_empty() {
+        return;
+    }
+    world
+        .bodies
+        .propagate_modified_body_positions_to_colliders(&mut world.colliders);
+    moved.sort_unstable_by_key(|h| h.into_raw_parts());
+    moved.dedup();
+    let params = world.integration_parameters;
+    for h in moved.iter() {
+        let Some(body) = world.bodies.get(*h) else {
+            continue;
+        };
+        for ch in body.colliders() {
+            if let Some(co) = world.colliders.get(*ch) {
+                if co.is_enabled() {
+                    let aabb = co.compute_broad_phase_aabb(&params, &world.bodies);
+                    if aabb.mins.is_finite() && aabb.maxs.is_finite() {
+                        world.broad_phase.set_aabb(&params, *ch, aabb);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The overlap of a pair when it was last measured, and both bodies' odometers then.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct PairState {
+    overlap: Real,
+    odo_self: Real,
+    odo_partner: Real,
+}

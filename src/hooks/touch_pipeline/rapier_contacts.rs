@@ -1,0 +1,126 @@
+//! What the step guard reads from rapier's narrow phase: its contact points of a pair at the
+//! step's poses, its contact normal, whether a body rests on something fixed.
+
+use super::*;
+
+/// Whether collider `c` has a contact with a fixed or kinematic collider in rapier's narrow
+/// phase (a body resting on the floor).
+pub(super) fn supported(world: &PhysicsWorld, c: ColliderHandle) -> bool {
+    world.narrow_phase.contact_pairs_with(c).any(|p| {
+        let other = if p.collider1 == c {
+            p.collider2
+        } else {
+            p.collider1
+        };
+        p.has_any_active_contact()
+            && world.colliders.get(other).is_some_and(|co| {
+                co.parent()
+                    .and_then(|b| world.bodies.get(b))
+                    .is_none_or(|b| !b.is_dynamic())
+            })
+    })
+}
+
+/// Where collider `co` is now: its body's pose times its offset (the guard moves bodies; their
+/// colliders follow only when it syncs them after its passes).
+pub(super) fn collider_pose_now(
+    bodies: &rapier3d::dynamics::RigidBodySet,
+    co: &rapier3d::geometry::Collider,
+) -> Pose {
+    match (
+        co.parent().and_then(|pb| bodies.get(pb)),
+        co.position_wrt_parent(),
+    ) {
+        (Some(b), Some(rel)) => *b.position() * *rel,
+        _ => *co.position(),
+    }
+}
+
+/// rapier's contact manifold of a pair, read at the step's poses: the deepest of its contact
+/// points at the poses now and rapier's normal there (out of `partner` toward `mover`), and
+/// whether a point overlapped at the start of the step. The points are local to the colliders,
+/// so they are re-read at any pose as rapier's solver does; a recycled manifold (rapier keeps
+/// a pair's points while its relative pose drifts little) is read the same way.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct RapierContact {
+    pub(super) depth: Real,
+    pub(super) depth_at_start: Real,
+    pub(super) normal: Vector,
+    pub(super) overlapped_at_start: bool,
+}
+
+/// The [`RapierContact`] of a pair, `None` when rapier's manifolds hold no contact point for
+/// it. `*_prev` are the colliders' poses at the start of the step.
+pub(super) fn rapier_contact(
+    world: &PhysicsWorld,
+    partner: ColliderHandle,
+    partner_poses: (&Pose, &Pose),
+    mover: ColliderHandle,
+    mover_poses: (&Pose, &Pose),
+) -> Option<RapierContact> {
+    let pair = world.narrow_phase.contact_pair(partner, mover)?;
+    rapier_contact_of(pair, partner, partner_poses, mover_poses)
+}
+
+/// [`rapier_contact`] of a pair at hand.
+pub(super) fn rapier_contact_of(
+    pair: &rapier3d::geometry::ContactPair,
+    partner: ColliderHandle,
+    (partner_pose, partner_prev): (&Pose, &Pose),
+    (mover_pose, mover_prev): (&Pose, &Pose),
+) -> Option<RapierContact> {
+    let partner_first = pair.collider1 == partner;
+    let ((pos1, prev1), (pos2, prev2)) = if partner_first {
+        ((partner_pose, partner_prev), (mover_pose, mover_prev))
+    } else {
+        ((mover_pose, mover_prev), (partner_pose, partner_prev))
+    };
+    let mut overlapped_at_start = false;
+    let mut depth_at_start: Real = 0.0;
+    let mut deepest: Option<(Real, Vector)> = None;
+    for m in pair.manifolds() {
+        if m.points.is_empty() {
+            continue;
+        }
+        // The manifold's frames (a composite shape's part) at the poses now and at the start.
+        let frames = |a: &Pose, b: &Pose| {
+            let w1 = m.subshape_pos1().map_or(*a, |s| *a * *s);
+            let w2 = m.subshape_pos2().map_or(*b, |s| *b * *s);
+            (w1, w2, w1.rotation * m.local_n1)
+        };
+        let (w1, w2, n1) = frames(pos1, pos2);
+        let (v1, v2, m1) = frames(prev1, prev2);
+        for p in &m.points {
+            // Signed distances along collider 1's normal.
+            let before = (v2.transform_point(p.local_p2) - v1.transform_point(p.local_p1)).dot(m1);
+            overlapped_at_start |= before < 0.0;
+            depth_at_start = depth_at_start.max(-before);
+            let now = (w2.transform_point(p.local_p2) - w1.transform_point(p.local_p1)).dot(n1);
+            if deepest.is_none_or(|(best, _)| -now > best) {
+                deepest = Some((-now, n1));
+            }
+        }
+    }
+    let (depth, n1) = deepest?;
+    let normal = if partner_first { n1 } else { -n1 }.try_normalize()?;
+    depth.is_finite().then_some(RapierContact {
+        depth,
+        depth_at_start,
+        normal,
+        overlapped_at_start,
+    })
+}
+
+/// rapier's contact normal for the pair (from its deepest contact), oriented out of `fixed`
+/// toward `moving`.
+pub(super) fn rapier_normal(
+    world: &PhysicsWorld,
+    fixed: ColliderHandle,
+    moving: ColliderHandle,
+) -> Option<Vector> {
+    let pair = world.narrow_phase.contact_pair(fixed, moving)?;
+    let (manifold, _) = pair.find_deepest_contact()?;
+    let n = manifold.data.normal;
+    let n = if pair.collider1 == fixed { n } else { -n };
+    n.try_normalize()
+}
