@@ -83,6 +83,7 @@ fn check_touching(
     now: &Pose,
     c: &ContactConfiguration,
     u: Vector,
+    shapes: Option<(&dyn parry3d::shape::Shape, &dyn parry3d::shape::Shape)>,
 ) -> Result<(), TestCaseError> {
     let scale = fixed.scale().max(moving.scale());
     let at = shifted(now, c.reversing_vector);
@@ -102,8 +103,16 @@ fn check_touching(
         .fold(1.0f32, f32::min)
         .max(1e-3);
     let behind = shifted(&at, -(1e-4 * scale / nu) * u);
+    // Surfaces that still touch behind (distance 0) may only slide along each other: when the
+    // original convex shapes are at hand, parry's contact query says how deep they are there.
+    let grazing = shapes.is_some_and(|(a, b)| {
+        query::contact(pose_f, a, &behind, b, 0.0)
+            .ok()
+            .flatten()
+            .is_none_or(|k| k.dist >= -1e-5 * scale)
+    });
     prop_assert!(
-        !surfaces_intersect(fixed, pose_f, moving, &behind),
+        grazing || !surfaces_intersect(fixed, pose_f, moving, &behind),
         "penetrates after reversal: distance behind {}, at {}, state {:?}, depth {}",
         surface_distance(fixed, pose_f, moving, &behind),
         d,
@@ -145,7 +154,7 @@ proptest! {
         prop_assert!(c.on_trajectory);
         // Agrees with parry's linear shape cast from the pre-step pose.
         let len = toi + pen;
-        check_touching(&fixed, &pose_f, &moving, &now, &c, u)?;
+        check_touching(&fixed, &pose_f, &moving, &now, &c, u, Some((&a, &b)))?;
         let cast_pose = shifted(&now, -pen * u);
         let ours = shifted(&now, c.reversing_vector);
         let contact_dist = |p: &Pose| {
@@ -201,7 +210,7 @@ proptest! {
         let c = rec.reconstruct(&fixed, &pose_f, &moving, &now, &prev).unwrap();
         prop_assert!(c.needs_correction(), "state {:?}", c.state);
         prop_assert!((c.depth - pen).abs() <= 1e-4 * (4.0 + pen), "depth {} vs cast {}", c.depth, pen);
-        check_touching(&fixed, &pose_f, &moving, &now, &c, u)?;
+        check_touching(&fixed, &pose_f, &moving, &now, &c, u, None)?;
 
         let d = now.translation - prev.translation;
         let s = rec.reconstruct(&moving, &now, &fixed, &pose_f, &shifted(&pose_f, d)).unwrap();
@@ -226,7 +235,7 @@ proptest! {
             .unwrap();
         prop_assert_eq!(c.direction_source, DirectionSource::ZeroMotionFallback);
         prop_assert_eq!(c.state, TouchState::Penetrating);
-        check_touching(&fixed, &Pose::IDENTITY, &moving, &now, &c, c.direction)?;
+        check_touching(&fixed, &Pose::IDENTITY, &moving, &now, &c, c.direction, None)?;
     }
 
     /// The convex path (GJK first touch, local exact events) and the general branch-and-bound
