@@ -636,19 +636,7 @@ impl Reconstructor {
         s_from: f64,
         dir: DVec3,
     ) -> Option<(f64, Vector, Vector)> {
-        let scale = fixed.scale().max(moving.scale()) as f64;
-        let k = 1.0 / scale;
-        let pos12 = Pose::from_parts((k * (fr.tra - s_from * fr.u)).as_vec3(), fr.rot.as_quat());
-        let g1 = HillClimb {
-            mesh: fixed,
-            warm: Cell::new(self.ws.warm[0]),
-            k: k as Real,
-        };
-        let g2 = HillClimb {
-            mesh: moving,
-            warm: Cell::new(self.ws.warm[1]),
-            k: k as Real,
-        };
+        let (scale, pos12, g1, g2) = self.scaled_pair(fixed, moving, fr, -s_from * fr.u);
         let hit =
             gjk::directional_distance(&pos12, &g1, &g2, dir.as_vec3(), &mut VoronoiSimplex::new());
         self.ws.warm = [g1.warm.get(), g2.warm.get()];
@@ -1025,6 +1013,33 @@ impl Reconstructor {
             && sample_inside(fixed, moving, |p| inv * (p.as_dvec3() - shift - fr.tra)) == Some(true)
     }
 
+    /// The pair as parry's GJK sees it, on coordinates divided by the pair's scale (see
+    /// [`Reconstructor::convex_cast`]): the scale, the moving mesh's pose in the fixed one's
+    /// frame with the moving mesh shifted by `shift`, and both meshes as support maps warm-started
+    /// from the workspace (store their `warm` back after the query).
+    fn scaled_pair<'a>(
+        &self,
+        fixed: &'a TouchMesh,
+        moving: &'a TouchMesh,
+        fr: &Frame,
+        shift: DVec3,
+    ) -> (f64, Pose, HillClimb<'a>, HillClimb<'a>) {
+        let scale = fixed.scale().max(moving.scale()) as f64;
+        let k = 1.0 / scale;
+        let pos12 = Pose::from_parts((k * (fr.tra + shift)).as_vec3(), fr.rot.as_quat());
+        let climb = |mesh, warm| HillClimb {
+            mesh,
+            warm: Cell::new(warm),
+            k: k as Real,
+        };
+        (
+            scale,
+            pos12,
+            climb(fixed, self.ws.warm[0]),
+            climb(moving, self.ws.warm[1]),
+        )
+    }
+
     /// [`Reconstructor::penetrating_at`] for two convex meshes by GJK (and EPA when they
     /// intersect), on coordinates divided by the pair's scale like [`Reconstructor::convex_cast`]:
     /// overlapping deeper than the tolerance. `None` (the exact test decides) when the answer
@@ -1036,19 +1051,7 @@ impl Reconstructor {
         fr: &Frame,
         shift: DVec3,
     ) -> Option<bool> {
-        let scale = fixed.scale().max(moving.scale()) as f64;
-        let k = 1.0 / scale;
-        let pos12 = Pose::from_parts((k * (fr.tra + shift)).as_vec3(), fr.rot.as_quat());
-        let g1 = HillClimb {
-            mesh: fixed,
-            warm: Cell::new(self.ws.warm[0]),
-            k: k as Real,
-        };
-        let g2 = HillClimb {
-            mesh: moving,
-            warm: Cell::new(self.ws.warm[1]),
-            k: k as Real,
-        };
+        let (scale, pos12, g1, g2) = self.scaled_pair(fixed, moving, fr, shift);
         let dir = pos12.translation.try_normalize().unwrap_or(Vector::X);
         let mut simplex = VoronoiSimplex::new();
         simplex.reset(gjk::CsoPoint::from_shapes(&pos12, &g1, &g2, dir));
