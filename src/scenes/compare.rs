@@ -322,12 +322,9 @@ pub fn run_compare_side(scene: CompareScene, speed: Real, side: DropSide, steps:
             IntegrationParameters::default().max_ccd_substeps;
     }
     let mut touch = crate::hooks::TouchPipeline::default();
-    let mut depth = Vec::with_capacity(steps);
-    let mut tunneled_at = None;
-    let mut max_penetration: Real = 0.0;
-    let mut rest_since: Option<usize> = None;
+    let mut run = super::DropRecorder::new(steps);
     let mut seconds = 0.0;
-    for i in 0..steps {
+    for _ in 0..steps {
         let t0 = std::time::Instant::now();
         if side == DropSide::Touch {
             touch.step(&mut cw.world);
@@ -336,30 +333,7 @@ pub fn run_compare_side(scene: CompareScene, speed: Real, side: DropSide, steps:
         }
         seconds += t0.elapsed().as_secs_f64();
         let m = cw.measure();
-        depth.push(m.depth);
-        if m.through {
-            tunneled_at.get_or_insert(i + 1);
-        } else {
-            max_penetration = max_penetration.max(m.depth);
-        }
-        let resting = m.resting && !m.through;
-        rest_since = match (resting, rest_since) {
-            (true, None) => Some(i + 1),
-            (true, s) => s,
-            (false, _) => None,
-        };
+        run.record(m.depth, m.through, m.resting);
     }
-    let tunneled = tunneled_at.is_some();
-    DropRun {
-        tunneled_at,
-        max_penetration,
-        resting_penetration: if tunneled {
-            Real::NAN
-        } else {
-            depth.last().copied().unwrap_or(0.0)
-        },
-        steps_to_rest: rest_since.filter(|_| !tunneled),
-        depth,
-        seconds,
-    }
+    run.finish(seconds)
 }

@@ -615,12 +615,9 @@ pub fn run_drop_side(speed: Real, floor: DropFloor, side: DropSide, steps: usize
     }
     let with_crate = side == DropSide::Touch;
     let mut touch = crate::hooks::TouchPipeline::default();
-    let mut depth = Vec::with_capacity(steps);
-    let mut tunneled_at = None;
-    let mut max_penetration: Real = 0.0;
-    let mut rest_since: Option<usize> = None;
+    let mut run = DropRecorder::new(steps);
     let t0 = std::time::Instant::now();
-    for i in 0..steps {
+    for _ in 0..steps {
         if with_crate {
             touch.step(&mut w);
         } else {
@@ -628,33 +625,65 @@ pub fn run_drop_side(speed: Real, floor: DropFloor, side: DropSide, steps: usize
         }
         let body = &w.bodies[b];
         let pose = *body.position();
-        let d = box_depth_below_floor(&pose, DROP_BOX_HALF);
-        depth.push(d);
-        if pose.translation.y < 0.0 {
-            tunneled_at.get_or_insert(i + 1);
-        } else {
-            max_penetration = max_penetration.max(d);
+        run.record(
+            box_depth_below_floor(&pose, DROP_BOX_HALF),
+            pose.translation.y < 0.0,
+            body.linvel().length() < 0.01,
+        );
+    }
+    run.finish(t0.elapsed().as_secs_f64())
+}
+
+/// Builds a [`DropRun`] step by step (shared by [`run_drop_side`] and
+/// [`run_compare_side`]).
+struct DropRecorder {
+    depth: Vec<Real>,
+    tunneled_at: Option<usize>,
+    max_penetration: Real,
+    rest_since: Option<usize>,
+}
+
+impl DropRecorder {
+    fn new(steps: usize) -> Self {
+        Self {
+            depth: Vec::with_capacity(steps),
+            tunneled_at: None,
+            max_penetration: 0.0,
+            rest_since: None,
         }
-        let resting = body.linvel().length() < 0.01 && pose.translation.y >= 0.0;
-        rest_since = match (resting, rest_since) {
-            (true, None) => Some(i + 1),
+    }
+
+    /// One step: the depth, whether the body was through, whether it was at rest (counted
+    /// only above the floor).
+    fn record(&mut self, depth: Real, through: bool, resting: bool) {
+        self.depth.push(depth);
+        let step = self.depth.len();
+        if through {
+            self.tunneled_at.get_or_insert(step);
+        } else {
+            self.max_penetration = self.max_penetration.max(depth);
+        }
+        self.rest_since = match (resting && !through, self.rest_since) {
+            (true, None) => Some(step),
             (true, s) => s,
             (false, _) => None,
         };
     }
-    let seconds = t0.elapsed().as_secs_f64();
-    let tunneled = tunneled_at.is_some();
-    DropRun {
-        tunneled_at,
-        max_penetration,
-        resting_penetration: if tunneled {
-            Real::NAN
-        } else {
-            depth.last().copied().unwrap_or(0.0)
-        },
-        steps_to_rest: rest_since.filter(|_| !tunneled),
-        depth,
-        seconds,
+
+    fn finish(self, seconds: f64) -> DropRun {
+        let tunneled = self.tunneled_at.is_some();
+        DropRun {
+            tunneled_at: self.tunneled_at,
+            max_penetration: self.max_penetration,
+            resting_penetration: if tunneled {
+                Real::NAN
+            } else {
+                self.depth.last().copied().unwrap_or(0.0)
+            },
+            steps_to_rest: self.rest_since.filter(|_| !tunneled),
+            depth: self.depth,
+            seconds,
+        }
     }
 }
 
