@@ -2,7 +2,7 @@
 //! went through something) back to first touch, and keeps the hook flags of fast bodies.
 
 use super::rapier_contacts::{
-    collider_pose_now, rapier_contact, rapier_contact_of, rapier_normal, supported,
+    collider_pose_now, rapier_contact_of, rapier_normal, supported, RapierContact,
 };
 use super::*;
 
@@ -107,90 +107,98 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let fast = d.length() + turn >= mesh.min_extent().min(prediction);
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
-                    let partners: Vec<ColliderHandle> = if fast || pass > 0 || is_tool {
-                        let swept = co
-                            .shape()
-                            .compute_aabb(&pose_now)
-                            .merged(&co.shape().compute_aabb(&prev_pose))
-                            .loosened(turn);
-                        world
-                            .intersect_aabb_conservative(swept, QueryFilter::default())
-                            .map(|(h, _)| h)
-                            .collect()
-                    } else {
-                        // A slow body: only rapier's pairs, and among them only those its own
-                        // contact points (re-read at the poses now) do not show calm.
-                        // A body that moved less than half the slop changes a pair's depth by
-                        // less than the slop unless its partner moved too: a fixed partner did
-                        // not, and a dynamic one that did checks the pair from its side.
-                        let still =
-                            !self.options.report_touching && d.length() + turn <= 0.5 * slop;
-                        let mut calm_skipped = Vec::new();
-                        for p in world.narrow_phase.contact_pairs_with(ch) {
-                            let ph = if p.collider1 == ch {
-                                p.collider2
-                            } else {
-                                p.collider1
-                            };
-                            let Some(partner) = world.colliders.get(ph) else {
-                                continue;
-                            };
-                            if still
-                                && partner
-                                    .parent()
-                                    .and_then(|pb| world.bodies.get(pb))
-                                    .is_none_or(|b| !b.is_kinematic())
-                            {
-                                continue;
-                            }
+                    let read =
+                        |ph: ColliderHandle,
+                         partner: &rapier3d::geometry::Collider,
+                         pair: Option<&rapier3d::geometry::ContactPair>| {
                             let partner_pose = collider_pose_now(&world.bodies, partner);
                             let partner_prev = previous_collider_pose(
                                 &self.hooks.prev_poses,
                                 partner,
                                 partner_pose,
                             );
-                            let travel = (d - body_motion(
+                            let dp = body_motion(
                                 &self.hooks.prev_poses,
                                 &world.bodies,
                                 partner.parent(),
-                            ))
-                            .length()
+                            );
+                            let travel = (d - dp).length()
                                 + turn
                                 + partner_prev.rotation.angle_between(partner_pose.rotation)
                                     * collider_reach(partner);
-                            // rapier's points hold every feature pair within its prediction
-                            // distance at the step's start: they still tell the depth when
-                            // the pair moved less than that.
-                            let rc = rapier_contact_of(
-                                p,
-                                ph,
-                                (&partner_pose, &partner_prev),
-                                (&pose_now, &prev_pose),
-                            );
-                            let trusted = travel <= prediction
-                                || !(mesh_exact
-                                    && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact));
-                            let partner_dynamic = partner
-                                .parent()
-                                .and_then(|pb| world.bodies.get(pb))
-                                .is_some_and(|b| b.is_dynamic());
-                            let calm = match &rc {
-                                Some(r) if r.overlapped_at_start => {
-                                    partner_dynamic
-                                        || (trusted && r.depth <= self.options.resting_slop)
-                                }
-                                Some(r) => {
-                                    !self.options.report_touching && trusted && r.depth <= slop
-                                }
-                                None => !self.options.report_touching && travel <= slop,
-                            };
-                            if !calm {
-                                calm_skipped.push(ph);
+                            PairView {
+                                partner_pose,
+                                dp,
+                                travel,
+                                // rapier's contact points say whether the pair overlapped when
+                                // the step began. Their depth now is trusted while the pair moved
+                                // less than rapier's prediction distance (they hold every feature
+                                // pair within it at the step's start; a spinning body brings new
+                                // corners in), and for curved shapes at any travel (rapier's
+                                // contacts are exact there; the touch mesh is a tessellation).
+                                rapier: pair.and_then(|p| {
+                                    rapier_contact_of(
+                                        p,
+                                        ph,
+                                        (&partner_pose, &partner_prev),
+                                        (&pose_now, &prev_pose),
+                                    )
+                                }),
+                                trusted: travel <= prediction
+                                    || !(mesh_exact
+                                        && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact)),
+                                partner_dynamic: partner
+                                    .parent()
+                                    .and_then(|pb| world.bodies.get(pb))
+                                    .is_some_and(|b| b.is_dynamic()),
                             }
-                        }
-                        calm_skipped
-                    };
-                    for ph in partners {
+                        };
+                    let partners: Vec<(ColliderHandle, Option<PairView>)> =
+                        if fast || pass > 0 || is_tool {
+                            let swept = co
+                                .shape()
+                                .compute_aabb(&pose_now)
+                                .merged(&co.shape().compute_aabb(&prev_pose))
+                                .loosened(turn);
+                            world
+                                .intersect_aabb_conservative(swept, QueryFilter::default())
+                                .map(|(h, _)| (h, None))
+                                .collect()
+                        } else {
+                            // A slow body: only rapier's pairs, and among them only those its
+                            // own contact points (re-read at the poses now) do not show calm.
+                            // A body that moved less than half the slop changes a pair's depth
+                            // by less than the slop unless its partner moved too: a fixed
+                            // partner did not, and a dynamic one that did checks the pair from
+                            // its side.
+                            let still =
+                                !self.options.report_touching && d.length() + turn <= 0.5 * slop;
+                            let mut restless = Vec::new();
+                            for p in world.narrow_phase.contact_pairs_with(ch) {
+                                let ph = if p.collider1 == ch {
+                                    p.collider2
+                                } else {
+                                    p.collider1
+                                };
+                                let Some(partner) = world.colliders.get(ph) else {
+                                    continue;
+                                };
+                                if still
+                                    && partner
+                                        .parent()
+                                        .and_then(|pb| world.bodies.get(pb))
+                                        .is_none_or(|b| !b.is_kinematic())
+                                {
+                                    continue;
+                                }
+                                let view = read(ph, partner, Some(p));
+                                if !view.calm(&self.options) {
+                                    restless.push((ph, Some(view)));
+                                }
+                            }
+                            restless
+                        };
+                    for (ph, view) in partners {
                         let Some(partner) = world.colliders.get(ph) else {
                             continue;
                         };
@@ -219,40 +227,23 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         else {
                             continue;
                         };
-                        let partner_pose = collider_pose_now(&world.bodies, partner);
                         let partner_body = partner.parent();
-                        let partner_dynamic = partner_body
-                            .and_then(|pb| world.bodies.get(pb))
-                            .is_some_and(|b| b.is_dynamic());
                         // A pair rapier's manifold shows overlapping when the step began is a
                         // resting contact rapier is resolving: no first touch on this step's
                         // path. Pairs of two dynamic bodies (a stack) are rapier's; against a
                         // fixed or kinematic partner, only a pair now deeper than the resting
                         // slop is measured (along rapier's normal) and pushed back. Nothing is
                         // reconstructed for the resting pairs of a calm pile.
-                        let partner_prev =
-                            previous_collider_pose(&self.hooks.prev_poses, partner, partner_pose);
-                        let dp = body_motion(&self.hooks.prev_poses, &world.bodies, partner_body);
-                        let travel = (d - dp).length()
-                            + turn
-                            + partner_prev.rotation.angle_between(partner_pose.rotation)
-                                * collider_reach(partner);
-                        // rapier's contact points say whether the pair overlapped when the
-                        // step began. Their depth now is trusted while the pair moved less
-                        // than rapier's prediction distance (they hold every feature pair
-                        // within it at the step's start; a spinning body brings new corners
-                        // in).
-                        let rapier = rapier_contact(
-                            world,
-                            ph,
-                            (&partner_pose, &partner_prev),
-                            ch,
-                            (&pose_now, &prev_pose),
-                        );
-                        // A curved shape's contacts are rapier's exact ones (its touch mesh is
-                        // a tessellation): they are trusted at any travel.
-                        let trusted = travel <= prediction
-                            || !(mesh_exact && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact));
+                        let PairView {
+                            partner_pose,
+                            dp,
+                            travel,
+                            rapier,
+                            trusted,
+                            partner_dynamic,
+                        } = view.unwrap_or_else(|| {
+                            read(ph, partner, world.narrow_phase.contact_pair(ph, ch))
+                        });
                         let overlapped = rapier.is_some_and(|r| r.overlapped_at_start);
                         if partner_dynamic && overlapped {
                             continue;
@@ -618,4 +609,35 @@ pub(super) struct PairState {
     overlap: Real,
     odo_self: Real,
     odo_partner: Real,
+}
+
+/// One pair as the guard reads it, before deciding anything: the partner's pose now, its
+/// translation over the step, the pair's relative travel (translation
+/// plus both rotations' arcs), rapier's contact points of the pair and whether they are
+/// trusted at that travel, and whether the partner is dynamic.
+#[derive(Copy, Clone, Debug)]
+struct PairView {
+    partner_pose: Pose,
+    dp: Vector,
+    travel: Real,
+    rapier: Option<RapierContact>,
+    trusted: bool,
+    partner_dynamic: bool,
+}
+
+impl PairView {
+    /// A slow pair the guard has nothing to do for, decided from rapier's points alone (the
+    /// same rules the guard applies to every pair it looks at): a resting pair with a dynamic
+    /// partner or within the resting slop, a non-resting one no deeper than the slop, or, with
+    /// no points, one that travelled less than the slop.
+    fn calm(&self, options: &TouchOptions) -> bool {
+        let slop = options.penetration_slop;
+        match &self.rapier {
+            Some(r) if r.overlapped_at_start => {
+                self.partner_dynamic || (self.trusted && r.depth <= options.resting_slop)
+            }
+            Some(r) => !options.report_touching && self.trusted && r.depth <= slop,
+            None => !options.report_touching && self.travel <= slop,
+        }
+    }
 }

@@ -49,20 +49,8 @@ pub(super) struct RapierContact {
     pub(super) overlapped_at_start: bool,
 }
 
-/// The [`RapierContact`] of a pair, `None` when rapier's manifolds hold no contact point for
+/// The [`RapierContact`] of `pair`, `None` when rapier's manifolds hold no contact point for
 /// it. `*_prev` are the colliders' poses at the start of the step.
-pub(super) fn rapier_contact(
-    world: &PhysicsWorld,
-    partner: ColliderHandle,
-    partner_poses: (&Pose, &Pose),
-    mover: ColliderHandle,
-    mover_poses: (&Pose, &Pose),
-) -> Option<RapierContact> {
-    let pair = world.narrow_phase.contact_pair(partner, mover)?;
-    rapier_contact_of(pair, partner, partner_poses, mover_poses)
-}
-
-/// [`rapier_contact`] of a pair at hand.
 pub(super) fn rapier_contact_of(
     pair: &rapier3d::geometry::ContactPair,
     partner: ColliderHandle,
