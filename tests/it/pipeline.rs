@@ -2,7 +2,8 @@
 //! at up to 100 m/s onto a fixed cuboid and onto a zero-thickness TriMesh floor never tunnel and
 //! never penetrate more than 1 mm after any step; a U-shaped TriMesh body rests on both legs
 //! over a bump; a resting stack stays still; removals, sleeping bodies and bodies without
-//! colliders do not break the hooks.
+//! colliders do not break the hooks; degenerate bodies (massless, zero-size, NaN or infinite
+//! velocity) and `dt = 0` neither panic nor put a NaN pose into rapier.
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -333,5 +334,93 @@ fn fast_trimesh_body_does_not_tunnel() {
             pose.translation.y
         );
         assert!(box_depth_below_floor(&pose, 0.25) <= 1e-3);
+    }
+}
+
+/// Degenerate worlds through the pipeline, in both opt-in modes, against vanilla rapier on the
+/// same world: a massless dynamic body (density 0) sunk into the floor, a zero-size cuboid, a
+/// body with a NaN velocity, a body with an infinite angular velocity, and `dt = 0`. The
+/// pipeline never panics; every body vanilla rapier keeps finite stays finite (the guard hands
+/// no NaN to rapier); with `dt = 0` nothing moves, so nothing is corrected.
+#[test]
+fn degenerate_bodies_and_zero_dt_neither_panic_nor_hand_nan_to_rapier() {
+    let build = |mode: Option<bool>, dt: f32| {
+        let mut w = world();
+        w.integration_parameters.dt = dt;
+        add_floor(&mut w);
+        let flags = if mode == Some(true) {
+            HOOKS
+        } else {
+            ActiveHooks::empty()
+        };
+        let mut add = |at: Vector, linvel: Vector, angvel: Vector, co: ColliderBuilder| {
+            let b = w.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .translation(at)
+                    .linvel(linvel)
+                    .angvel(angvel),
+            );
+            w.insert_collider(co.active_hooks(flags), Some(b));
+            b
+        };
+        let bodies = [
+            add(
+                Vector::new(-2.0, 0.2, 0.0),
+                Vector::new(0.0, -5.0, 0.0),
+                Vector::ZERO,
+                ColliderBuilder::cuboid(0.25, 0.25, 0.25).density(0.0),
+            ),
+            add(
+                Vector::new(0.0, 1.0, 0.0),
+                Vector::new(0.0, -30.0, 0.0),
+                Vector::ZERO,
+                ColliderBuilder::cuboid(0.0, 0.0, 0.0),
+            ),
+            add(
+                Vector::new(2.0, 1.0, 0.0),
+                Vector::new(f32::NAN, -5.0, 0.0),
+                Vector::ZERO,
+                ColliderBuilder::cuboid(0.25, 0.25, 0.25),
+            ),
+            add(
+                Vector::new(0.0, 1.0, 2.0),
+                Vector::new(0.0, -5.0, 0.0),
+                Vector::new(f32::INFINITY, 0.0, 0.0),
+                ColliderBuilder::cuboid(0.25, 0.25, 0.25),
+            ),
+        ];
+        (w, bodies)
+    };
+    for dt in [1.0 / 60.0, 0.0] {
+        let (mut vanilla, bodies) = build(None, dt);
+        for _ in 0..30 {
+            vanilla.step();
+        }
+        for mode in [Some(true), Some(false)] {
+            let (mut w, bodies_t) = build(mode, dt);
+            assert_eq!(bodies, bodies_t);
+            let mut touch = TouchPipeline::default();
+            if mode == Some(false) {
+                let all: Vec<_> = w.colliders.iter().map(|(h, _)| h).collect();
+                for h in all {
+                    touch.track_collider(h);
+                }
+            }
+            for _ in 0..30 {
+                touch.step(&mut w);
+                if dt == 0.0 {
+                    assert_eq!(touch.corrections(), 0, "{mode:?}: a correction at dt = 0");
+                }
+            }
+            for b in bodies {
+                if vanilla.bodies[b].position().is_finite() {
+                    assert!(
+                        w.bodies[b].position().is_finite(),
+                        "{mode:?} dt {dt}: {:?} finite in vanilla, not through the pipeline",
+                        vanilla.bodies[b].position()
+                    );
+                }
+            }
+        }
     }
 }
