@@ -12,6 +12,7 @@ pub mod generators;
 mod hull;
 mod motion;
 mod reconstruction;
+mod shape_cast;
 mod shapes;
 mod touch_mesh;
 

@@ -3,6 +3,7 @@
 mod common;
 mod compare_scenes;
 mod coupling;
+mod curved_reconstruction;
 mod every_scale;
 mod fig4;
 mod mesh_inputs;
