@@ -297,6 +297,16 @@ pub(crate) fn pair_configuration(
     let (co1, co2) = (colliders.get(c1)?, colliders.get(c2)?);
     let (pos1, pos2) = (pos1?, pos2?);
     let motion = relative_motion(prev_poses, bodies, co1, pos1, co2, pos2, &m2.mesh);
+    // A curved shape's touch mesh is a tessellation: its pairs are walked back on the shapes
+    // themselves (conservative advancement on parry's distance), polyhedra by the exact method
+    // that names features.
+    if !(m1.exact && m2.exact) {
+        match rec.reconstruct_shapes(co1.shape(), &pos1, co2.shape(), &motion) {
+            Ok(Some(c)) => return Some(c),
+            Ok(None) => {}
+            Err(_) => return None,
+        }
+    }
     rec.reconstruct_motion(&m1.mesh, &pos1, &m2.mesh, &motion)
         .ok()
 }

@@ -5,6 +5,7 @@ use super::rapier_contacts::{
     collider_pose_now, rapier_contact_of, rapier_normal, supported, RapierContact,
 };
 use super::*;
+use crate::geometry::ContactConfiguration;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
@@ -97,6 +98,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let Some(co) = world.colliders.get(ch) else {
                         continue;
                     };
+                    // A pair with a curved shape (a tessellated touch mesh) is measured on the
+                    // shapes themselves.
+                    let curved_with = |ph: ColliderHandle| {
+                        !(mesh_exact && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact))
+                    };
                     let co_rel = co.position_wrt_parent().copied();
                     let pose_now = co_rel.map_or(*co.position(), |rel| body_pose * rel);
                     let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
@@ -142,11 +148,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                         ph,
                                         (&partner_pose, &partner_prev),
                                         (&pose_now, &prev_pose),
+                                        slop,
                                     )
                                 }),
-                                trusted: travel <= prediction
-                                    || !(mesh_exact
-                                        && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact)),
+                                trusted: travel <= prediction || curved_with(ph),
                                 partner_dynamic: partner
                                     .parent()
                                     .and_then(|pb| world.bodies.get(pb))
@@ -228,6 +233,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             continue;
                         };
                         let partner_body = partner.parent();
+                        let curved = curved_with(ph);
                         // A pair rapier's manifold shows overlapping when the step began is a
                         // resting contact rapier is resolving: no first touch on this step's
                         // path. Pairs of two dynamic bodies (a stack) are rapier's; against a
@@ -244,8 +250,20 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         } = view.unwrap_or_else(|| {
                             read(ph, partner, world.narrow_phase.contact_pair(ph, ch))
                         });
-                        let overlapped = rapier.is_some_and(|r| r.overlapped_at_start);
-                        if partner_dynamic && overlapped {
+                        let overlapped = rapier.is_some_and(|r| r.in_contact_at_start);
+                        let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
+                            (a, b) if b > 0.0 => a.min(b),
+                            (a, _) => a,
+                        };
+                        let may_tunnel = (d - dp).length() >= safe;
+                        // Two dynamic bodies rapier already had in contact when the step began
+                        // (its manifold holds points for them) that moved less than their safe
+                        // step length relative to each other: rapier's solver held that contact
+                        // through the step and neither passed through the other. What overlap
+                        // is left is rapier's soft contact, left as vanilla rapier leaves it:
+                        // pushing one body of a falling pile out of the body under it drove the
+                        // body above 0.9 m into it (rapier's convex-hull stress scene).
+                        if partner_dynamic && (overlapped || !may_tunnel) {
                             continue;
                         }
                         // (A pair that moved farther is measured on its own path below.)
@@ -261,27 +279,21 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 .unwrap_or(0.0)
                         };
                         let (odo_self, odo_partner) = (odo(Some(bh)), odo(partner_body));
+                        let push_out = |out: Vector| {
+                            push_out(
+                                self.options.reconstruction,
+                                curved,
+                                (partner, &partner_mesh, &partner_pose),
+                                (co, &mesh, &pose_now),
+                                out,
+                            )
+                        };
                         let (config, along_normal) = if let Some(r) = &resting {
-                            let mut rec = Reconstructor::new(ReconstructionOptions {
-                                zero_motion_direction: Some(-r.normal),
-                                ..self.options.reconstruction
-                            });
-                            let Ok(c) = rec.reconstruct(
-                                &partner_mesh,
-                                &partner_pose,
-                                &mesh,
-                                &pose_now,
-                                &pose_now,
-                            ) else {
+                            let Some(c) = push_out(r.normal) else {
                                 continue;
                             };
                             (c.clone(), Some(c))
                         } else {
-                            let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
-                                (a, b) if b > 0.0 => a.min(b),
-                                (a, _) => a,
-                            };
-                            let may_tunnel = (d - dp).length() >= safe;
                             if !self.options.report_touching && !may_tunnel {
                                 // A slow pair: rapier's own contact points, re-read at the poses
                                 // now, say how deep it is; with no points rapier found it apart
@@ -359,20 +371,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             {
                                 None
                             } else {
-                                rapier_normal(world, ph, ch).and_then(|n| {
-                                    let mut rec = Reconstructor::new(ReconstructionOptions {
-                                        zero_motion_direction: Some(-n),
-                                        ..self.options.reconstruction
-                                    });
-                                    rec.reconstruct(
-                                        &partner_mesh,
-                                        &partner_pose,
-                                        &mesh,
-                                        &pose_now,
-                                        &pose_now,
-                                    )
-                                    .ok()
-                                })
+                                rapier_normal(world, ph, ch).and_then(push_out)
                             };
                             (config, along_normal)
                         };
@@ -399,10 +398,20 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let target = resting.map_or(self.options.resting_slop, |r| {
                             r.depth_at_start.max(self.options.resting_slop)
                         });
+                        // Over one step a pair gets deeper by at most its relative travel: an
+                        // overlap along the normal beyond that (and beyond what rapier's points
+                        // showed when the step began) is a measure gone wrong, not a motion to
+                        // undo. (An open, bumpy TriMesh floor gave a way out 3.8 m long for a
+                        // cube that had moved 5 mm; the push put it inside a ball.)
+                        let deepest_possible = travel
+                            + resting.map_or(0.0, |r| r.depth_at_start)
+                            + self.options.resting_slop;
                         let config = match (&along_normal, on_path) {
                             (_, true) => config,
                             (Some(c), false)
-                                if c.depth > target + 0.1 * slop && !partner_dynamic =>
+                                if c.depth > target + 0.1 * slop
+                                    && c.depth <= deepest_possible
+                                    && !partner_dynamic =>
                             {
                                 let keep = target / c.depth;
                                 let mut c = c.clone();
@@ -441,7 +450,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let r = config.reversing_vector;
                         // (A translation keeps the current orientation exactly.)
                         let turned = config.touch_pose.rotation != pose_now.rotation;
-                        let n = config.patches.first().map(|p| p.normal);
+                        // The contact normal, out of the partner toward this body, turned to
+                        // the side the body came from (an open mesh's triangle normal may face
+                        // either side).
+                        let n = config.patches.first().map(|p| {
+                            if p.normal.dot(r) < 0.0 {
+                                -p.normal
+                            } else {
+                                p.normal
+                            }
+                        });
                         // Split the correction by inverse mass when the partner is dynamic
                         // too, unless the partner rests on a fixed or kinematic collider: its
                         // share would push it into what supports it (seen: a thin dynamic plate
@@ -459,6 +477,27 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             }
                             _ => 1.0,
                         };
+                        // The velocity into the partner, relative to it: removed as a plastic
+                        // impact along the normal would, shared as the correction is (momentum
+                        // conserved). Left as it was, it kept driving a body the guard held at
+                        // first touch, and whatever rested on it, deeper every step.
+                        let partner_v = partner_body
+                            .and_then(|pb| world.bodies.get(pb))
+                            .map_or(Vector::ZERO, |b| b.linvel());
+                        // A step undone almost whole (first touch right where it began) is a
+                        // blocked motion: what still closes along the way back goes too (a
+                        // body sliding into a concave corner of a TriMesh had velocity
+                        // tangent to the patch normal, and the guard held it there for good).
+                        let blocked = config.time_of_impact.is_some_and(|t| t < 0.1);
+                        let closing = n.and_then(|n| {
+                            let b = world.bodies.get(bh)?;
+                            let vrel = b.linvel() - partner_v;
+                            let mut dv = n * vrel.dot(n).min(0.0);
+                            if let Some(back) = r.try_normalize().filter(|_| blocked) {
+                                dv += back * (vrel - dv).dot(back).min(0.0);
+                            }
+                            (dv != Vector::ZERO && dv.is_finite()).then_some(dv)
+                        });
                         if let Some(b) = world.bodies.get_mut(bh) {
                             if turned {
                                 // A rotating path: the body goes to its pose at first touch
@@ -479,14 +518,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     b.set_translation(t, true);
                                 }
                             }
-                            if let Some(n) = n {
-                                // n points out of the partner toward this body: remove the
-                                // velocity into the partner (inelastic).
-                                let v = b.linvel();
-                                let vn = v.dot(n);
-                                if vn < 0.0 && b.is_dynamic() {
-                                    b.set_linvel(v - vn * n, true);
-                                }
+                            if let (Some(dv), true) = (closing, b.is_dynamic()) {
+                                b.set_linvel(b.linvel() - dv * share, true);
                             }
                         }
                         moved_bodies.push(bh);
@@ -496,6 +529,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 let t = b.translation() - r * (1.0 - share);
                                 if t.is_finite() {
                                     b.set_translation(t, true);
+                                }
+                                if let Some(dv) = closing {
+                                    b.set_linvel(b.linvel() + dv * (1.0 - share), true);
                                 }
                             }
                         }
@@ -633,11 +669,36 @@ impl PairView {
     fn calm(&self, options: &TouchOptions) -> bool {
         let slop = options.penetration_slop;
         match &self.rapier {
-            Some(r) if r.overlapped_at_start => {
+            Some(r) if r.in_contact_at_start => {
                 self.partner_dynamic || (self.trusted && r.depth <= options.resting_slop)
             }
             Some(r) => !options.report_touching && self.trusted && r.depth <= slop,
             None => !options.report_touching && self.travel <= slop,
         }
     }
+}
+
+/// The way out of an overlap along `out` (a world direction out of the partner) for the mover
+/// at its pose now: on the shapes themselves when the pair is `curved` (parry's shape cast),
+/// by the exact method on the touch meshes otherwise (and when parry has no cast).
+fn push_out(
+    options: ReconstructionOptions,
+    curved: bool,
+    (partner, partner_mesh, partner_pose): (&rapier3d::geometry::Collider, &TouchMesh, &Pose),
+    (mover, mesh, pose): (&rapier3d::geometry::Collider, &TouchMesh, &Pose),
+    out: Vector,
+) -> Option<ContactConfiguration> {
+    let mut rec = Reconstructor::new(ReconstructionOptions {
+        zero_motion_direction: Some(-out),
+        ..options
+    });
+    if curved {
+        match rec.push_out_shapes(partner.shape(), partner_pose, mover.shape(), pose, out) {
+            Ok(Some(c)) => return Some(c),
+            Ok(None) => {}
+            Err(_) => return None,
+        }
+    }
+    rec.reconstruct(partner_mesh, partner_pose, mesh, pose, pose)
+        .ok()
 }

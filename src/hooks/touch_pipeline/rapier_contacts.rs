@@ -38,7 +38,10 @@ pub(super) fn collider_pose_now(
 
 /// rapier's contact manifold of a pair, read at the step's poses: the deepest of its contact
 /// points at the poses now and rapier's normal there (out of `partner` toward `mover`), and
-/// whether a point overlapped at the start of the step. The points are local to the colliders,
+/// whether the pair was in contact at the start of the step (a point overlapping, or closer
+/// than `touch`: a body the guard left at first touch is in contact, and walking it back to a
+/// first touch at the very start of the next step would undo that whole step, freezing a
+/// rolling or sliding body in place). The points are local to the colliders,
 /// so they are re-read at any pose as rapier's solver does; a recycled manifold (rapier keeps
 /// a pair's points while its relative pose drifts little) is read the same way.
 #[derive(Copy, Clone, Debug)]
@@ -46,7 +49,7 @@ pub(super) struct RapierContact {
     pub(super) depth: Real,
     pub(super) depth_at_start: Real,
     pub(super) normal: Vector,
-    pub(super) overlapped_at_start: bool,
+    pub(super) in_contact_at_start: bool,
 }
 
 /// The [`RapierContact`] of `pair`, `None` when rapier's manifolds hold no contact point for
@@ -56,6 +59,7 @@ pub(super) fn rapier_contact_of(
     partner: ColliderHandle,
     (partner_pose, partner_prev): (&Pose, &Pose),
     (mover_pose, mover_prev): (&Pose, &Pose),
+    touch: Real,
 ) -> Option<RapierContact> {
     let partner_first = pair.collider1 == partner;
     let ((pos1, prev1), (pos2, prev2)) = if partner_first {
@@ -63,7 +67,7 @@ pub(super) fn rapier_contact_of(
     } else {
         ((mover_pose, mover_prev), (partner_pose, partner_prev))
     };
-    let mut overlapped_at_start = false;
+    let mut in_contact_at_start = false;
     let mut depth_at_start: Real = 0.0;
     let mut deepest: Option<(Real, Vector)> = None;
     for m in pair.manifolds() {
@@ -81,7 +85,7 @@ pub(super) fn rapier_contact_of(
         for p in &m.points {
             // Signed distances along collider 1's normal.
             let before = (v2.transform_point(p.local_p2) - v1.transform_point(p.local_p1)).dot(m1);
-            overlapped_at_start |= before < 0.0;
+            in_contact_at_start |= before < touch;
             depth_at_start = depth_at_start.max(-before);
             let now = (w2.transform_point(p.local_p2) - w1.transform_point(p.local_p1)).dot(n1);
             if deepest.is_none_or(|(best, _)| -now > best) {
@@ -95,7 +99,7 @@ pub(super) fn rapier_contact_of(
         depth,
         depth_at_start,
         normal,
-        overlapped_at_start,
+        in_contact_at_start,
     })
 }
 
