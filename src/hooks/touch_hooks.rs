@@ -23,6 +23,53 @@ pub(crate) struct CachedMesh {
     pub mesh: Arc<TouchMesh>,
     /// The mesh is the shape itself (a polyhedral shape), not a tessellation of a curved one.
     pub exact: bool,
+    /// What the shape is, for the primitives ([`shape_key`]): equal primitives share a mesh.
+    pub key: Option<ShapeKey>,
+}
+
+/// A primitive shape by kind and dimensions (the bits of its parameters).
+pub(crate) type ShapeKey = (u8, Vec<u32>);
+
+/// The [`ShapeKey`] of a primitive shape (a ball, a cuboid, a capsule, a cylinder, a cone and
+/// their rounded forms), `None` for the others. Colliders built one by one with
+/// `ColliderBuilder::ball(r)` hold equal shapes in separate `Arc`s; meshing a rounded cylinder
+/// (the hull of thousands of points) once per collider was most of rapier's CCD stress scene's
+/// extra cost.
+pub(crate) fn shape_key(shape: &dyn parry3d::shape::Shape) -> Option<ShapeKey> {
+    use parry3d::shape::TypedShape;
+    let bits = |v: &[crate::math::Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    let v3 = |v: Vector| [v.x, v.y, v.z];
+    Some(match shape.as_typed_shape() {
+        TypedShape::Ball(b) => (0, bits(&[b.radius])),
+        TypedShape::Cuboid(c) => (1, bits(&v3(c.half_extents))),
+        TypedShape::Capsule(c) => {
+            let (a, b) = (v3(c.segment.a), v3(c.segment.b));
+            (2, bits(&[a[0], a[1], a[2], b[0], b[1], b[2], c.radius]))
+        }
+        TypedShape::Cylinder(c) => (3, bits(&[c.half_height, c.radius])),
+        TypedShape::Cone(c) => (4, bits(&[c.half_height, c.radius])),
+        TypedShape::RoundCuboid(c) => {
+            let h = v3(c.inner_shape.half_extents);
+            (5, bits(&[h[0], h[1], h[2], c.border_radius]))
+        }
+        TypedShape::RoundCylinder(c) => (
+            6,
+            bits(&[
+                c.inner_shape.half_height,
+                c.inner_shape.radius,
+                c.border_radius,
+            ]),
+        ),
+        TypedShape::RoundCone(c) => (
+            7,
+            bits(&[
+                c.inner_shape.half_height,
+                c.inner_shape.radius,
+                c.border_radius,
+            ]),
+        ),
+        _ => return None,
+    })
 }
 
 /// Shapes whose touch mesh is the shape itself: their surface is made of flat triangles.
@@ -398,5 +445,39 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
             _ => {}
         }
         self.inner.modify_solver_contacts(context);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shape_key;
+    use parry3d::shape::SharedShape;
+
+    #[test]
+    fn equal_primitives_share_a_key_and_different_ones_do_not() {
+        let key = |s: SharedShape| shape_key(s.as_ref());
+        assert_eq!(
+            key(SharedShape::round_cylinder(1.0, 0.5, 0.1)),
+            key(SharedShape::round_cylinder(1.0, 0.5, 0.1))
+        );
+        assert!(key(SharedShape::ball(0.5)).is_some());
+        assert_ne!(key(SharedShape::ball(0.5)), key(SharedShape::ball(0.5001)));
+        assert_ne!(
+            key(SharedShape::cylinder(1.0, 0.5)),
+            key(SharedShape::cone(1.0, 0.5))
+        );
+        assert_ne!(
+            key(SharedShape::capsule_y(1.0, 0.5)),
+            key(SharedShape::capsule_x(1.0, 0.5))
+        );
+        // Meshes and hulls are shared by `Arc` only.
+        let hull = SharedShape::convex_hull(&[
+            parry3d::math::Vector::ZERO,
+            parry3d::math::Vector::X,
+            parry3d::math::Vector::Y,
+            parry3d::math::Vector::Z,
+        ])
+        .unwrap();
+        assert_eq!(key(hull), None);
     }
 }

@@ -4,7 +4,8 @@
 use super::pair_filter::{rapier_solves_pair, user_removes_contact};
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
-    body_motion, meshed_exactly, pair_configuration, previous_collider_pose, CachedMesh, TouchHooks,
+    body_motion, meshed_exactly, pair_configuration, previous_collider_pose, shape_key, CachedMesh,
+    ShapeKey, TouchHooks,
 };
 use crate::geometry::{
     ReconstructionOptions, Reconstructor, TouchMesh, TouchMeshError, TouchState,
@@ -344,6 +345,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             .values()
             .map(|m| (m.shape_ptr, m.mesh.clone()))
             .collect();
+        // Equal primitives in separate `Arc`s share one mesh too.
+        let mut by_key: HashMap<ShapeKey, Arc<TouchMesh>> = meshes
+            .values()
+            .filter_map(|m| Some((m.key.clone()?, m.mesh.clone())))
+            .collect();
         for (h, co) in colliders.iter() {
             if !opted_in(&h, co) {
                 meshes.remove(&h);
@@ -355,7 +361,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             {
                 continue;
             }
-            let built = match by_shape.get(&ptr) {
+            let key = shape_key(co.shape());
+            let built = match by_shape
+                .get(&ptr)
+                .or_else(|| key.as_ref().and_then(|k| by_key.get(k)))
+            {
                 Some(mesh) => Ok(mesh.clone()),
                 None => TouchMesh::from_shape(co.shape()).map(Arc::new),
             };
@@ -363,12 +373,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 Ok(mesh) => {
                     self.refused.remove(&h);
                     by_shape.insert(ptr, mesh.clone());
+                    if let Some(k) = &key {
+                        by_key.insert(k.clone(), mesh.clone());
+                    }
                     meshes.insert(
                         h,
                         CachedMesh {
                             shape_ptr: ptr,
                             mesh,
                             exact: meshed_exactly(co.shape()),
+                            key,
                         },
                     );
                 }
