@@ -306,6 +306,26 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 if bound <= slop {
                                     continue;
                                 }
+                                // Points rapier had but that moved too far to be read (a body
+                                // sliding faster than the prediction distance per step): moved
+                                // out along rapier's normal by the slop, a pair GJK finds apart
+                                // overlaps by no more than the slop (a sliding cube on a TriMesh
+                                // floor was otherwise reconstructed every step).
+                                if let Some(r) = rapier.filter(|_| !trusted) {
+                                    let lifted = Pose::from_parts(
+                                        pose_now.translation + r.normal * slop,
+                                        pose_now.rotation,
+                                    );
+                                    let overlaps = parry3d::query::intersection_test(
+                                        &partner_pose,
+                                        partner.shape(),
+                                        &lifted,
+                                        co.shape(),
+                                    );
+                                    if overlaps.is_ok_and(|i| !i.intersecting) {
+                                        continue;
+                                    }
+                                }
                             }
                             // A pair rapier has contact points for, but that moved too far to
                             // read them, is reconstructed: parry's contact query is not asked
