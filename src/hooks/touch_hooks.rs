@@ -8,7 +8,8 @@ use crate::math::{Pose, Vector};
 use rapier3d::dynamics::{RigidBodyHandle, RigidBodySet};
 use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
 use rapier3d::pipeline::{ContactModificationContext, PairFilterContext, PhysicsHooks};
-use std::collections::HashMap;
+// parry's hash map (hashbrown with foldhash), as rapier uses: SipHash was 4.5 % of a pile's step.
+use parry3d::utils::hashmap::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -160,11 +161,11 @@ impl<H: PhysicsHooks> TouchHooks<H> {
     pub fn new(inner: H) -> Self {
         Self {
             inner,
-            meshes: HashMap::new(),
-            prev_poses: HashMap::new(),
+            meshes: HashMap::default(),
+            prev_poses: HashMap::default(),
             options: ReconstructionOptions::default(),
             slop: 0.0,
-            cache: Mutex::new(HashMap::new()),
+            cache: Mutex::new(HashMap::default()),
             pool: Mutex::new(Vec::new()),
             rewritten: AtomicUsize::new(0),
             dropped: AtomicUsize::new(0),

@@ -12,10 +12,11 @@ use crate::geometry::{
 };
 use crate::math::{Pose, Real, Vector};
 use parry3d::bounding_volume::BoundingVolume;
+use parry3d::utils::hashmap::HashMap;
+use parry3d::utils::hashset::HashSet;
 use rapier3d::dynamics::{IntegrationParameters, RigidBodyHandle};
 use rapier3d::geometry::{ColliderHandle, ColliderSet};
 use rapier3d::pipeline::{ActiveHooks, EventHandler, PhysicsHooks, PhysicsWorld, QueryFilter};
-use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 mod guard;
@@ -185,13 +186,13 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             options: TouchOptions::default(),
             reconstructor: Reconstructor::default(),
             reports: Vec::new(),
-            tools: HashMap::new(),
+            tools: HashMap::default(),
             corrections: 0,
-            odometers: HashMap::new(),
-            tracked: HashSet::new(),
-            hooked: HashSet::new(),
-            pair_states: HashMap::new(),
-            refused: HashMap::new(),
+            odometers: HashMap::default(),
+            tracked: HashSet::default(),
+            hooked: HashSet::default(),
+            pair_states: HashMap::default(),
+            refused: HashMap::default(),
         }
     }
 

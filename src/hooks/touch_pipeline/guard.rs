@@ -55,7 +55,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         self.pair_states
             .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
 
-        let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::new();
+        let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::default();
         let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
         let mut moved_before = 0;
         for pass in 0..passes {
