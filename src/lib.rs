@@ -47,6 +47,8 @@
 //! - "One object wholly inside the other" is detected only when the outer one is closed;
 //!   open meshes (a floor of zero thickness) are shells.
 #![warn(missing_docs)]
+#![warn(missing_debug_implementations)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 
 pub use parry3d;
 pub use rapier3d;
@@ -61,6 +63,23 @@ pub mod scenes;
 pub mod surface;
 
 /// Everything a user needs, in one import.
+///
+/// It glob-imports next to `rapier3d::prelude::*` without ambiguity: the names both export
+/// (`Real`, `Vector`, `Pose`, `Rotation`, `Cuboid`, `ConvexPolyhedron`, `TriMesh`) are the very
+/// same items.
+///
+/// ```
+/// # #![deny(ambiguous_glob_imports)]
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::rapier3d::prelude::*;
+///
+/// // A unit cube on a collider and as a touch mesh, from the same `Cuboid`.
+/// let shape = Cuboid::new(Vector::splat(0.5));
+/// let collider = ColliderBuilder::new(SharedShape::new(shape)).build();
+/// let mesh = TouchMesh::from_shape(collider.shape()).unwrap();
+/// assert_eq!(mesh.num_triangles(), 12);
+/// assert!((mesh.min_extent() - 1.0).abs() < 1e-6);
+/// ```
 pub mod prelude {
     pub use crate::coupling::{
         AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,
@@ -78,10 +97,14 @@ pub mod prelude {
         FilterKind, ForceProfile, Integrator, MassDistribution, MassSpringSurface,
         MassSpringSurfaceBuilder, SpringModel, SurfaceError,
     };
-    pub use parry3d::shape::{ConvexPolyhedron, Cuboid, TriMesh};
+    // The shapes below are the very items `rapier3d::prelude` exports under the same names
+    // (rapier's `Cuboid` is its own alias of parry's), so both preludes glob-import together.
+    pub use parry3d::shape::{ConvexPolyhedron, TriMesh};
+    pub use rapier3d::geometry::Cuboid;
 }
 
 /// The README's code blocks, compiled and run as doctests so the README stays true.
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
+#[derive(Debug)]
 pub struct ReadmeDoctests;

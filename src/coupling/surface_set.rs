@@ -40,6 +40,27 @@ pub struct SurfaceHandle {
 }
 
 /// How a surface is attached.
+///
+/// # Example
+/// A 1020 Hz surface in a 60 Hz scene: its time step becomes the world's over 17.
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::rapier3d::prelude::*;
+/// use rapier_touch::surface::meshing::plate;
+///
+/// let mut world = PhysicsWorld::default(); // dt = 1/60 s
+/// let body = world.insert_body(RigidBodyBuilder::fixed());
+/// let surface = || MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, 2, 2)).build().unwrap();
+/// let mut set = SurfaceSet::new();
+/// let options = AttachOptions { substeps: 17, collider: false };
+/// let h = set.insert(surface(), body, &mut world, options).unwrap();
+/// let attached = set.get(h).unwrap();
+/// assert!((attached.surface.dt() - 1.0 / 60.0 / 17.0).abs() < 1e-9);
+/// assert_eq!(attached.collider(), None);
+/// // At least one surface step per rigid step.
+/// let none = AttachOptions { substeps: 0, ..Default::default() };
+/// assert_eq!(set.insert(surface(), body, &mut world, none), Err(CouplingError::InvalidSubsteps));
+/// ```
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct AttachOptions {
     /// Surface steps per rigid step (a 1 kHz surface in a 60 Hz scene: 17). The surface's time
@@ -84,6 +105,23 @@ pub struct AttachedSurface {
     scratch: Vec<Vector>,
     before: Vec<Vector>,
     was_held: Vec<bool>,
+}
+
+impl std::fmt::Debug for AttachedSurface {
+    /// The surface, its attachment and how many of its vertices the tools hold; the scratch
+    /// buffers are left out.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let held = (0..self.surface.num_vertices() as u32)
+            .filter(|&i| self.surface.is_held(i))
+            .count();
+        f.debug_struct("AttachedSurface")
+            .field("surface", &self.surface)
+            .field("body", &self.body)
+            .field("collider", &self.collider)
+            .field("substeps", &self.substeps)
+            .field("held_vertices", &held)
+            .finish_non_exhaustive()
+    }
 }
 
 impl AttachedSurface {
@@ -143,9 +181,70 @@ struct ToolState {
 ///   contact with linear springs gives them no reason to slide under); tilt it like a sled.
 /// - The surface is rigidly attached to its body's frame; the body's acceleration does not
 ///   load it.
+///
+/// # Example
+/// A plate 0.4 m square (vertices 0.1 m apart) clamped at its rim, pressed at its centre by a
+/// kinematic ball lowered until its lowest point is 2 cm below the plate:
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::rapier3d::prelude::*;
+/// use rapier_touch::surface::meshing::{plate, plate_rim};
+///
+/// let mut world = PhysicsWorld { gravity: Vector::ZERO, ..Default::default() };
+/// let fixed = world.insert_body(RigidBodyBuilder::fixed());
+/// let surface = MassSpringSurfaceBuilder::from_mesh(&plate(0.4, 0.4, 4, 4))
+///     .stiffness(100.0)
+///     .mass(MassDistribution::Total(0.1))
+///     .pinned(plate_rim(4, 4))
+///     .build()
+///     .unwrap();
+/// let options = AttachOptions { substeps: 4, collider: true };
+/// let mut set = SurfaceSet::new();
+/// let plate = set.insert(surface, fixed, &mut world, options).unwrap();
+///
+/// let start = Vector::new(0.0, 0.1, 0.0);
+/// let ball = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(start));
+/// let tool = world.insert_collider(ColliderBuilder::ball(0.05), Some(ball));
+/// set.add_tool(tool, &mut world);
+/// for step in 1..=60 {
+///     // Down 7 cm in 20 steps, then held: the ball's lowest point ends at y = -0.02.
+///     let y = (0.1 - 0.0035 * step as f32).max(0.03);
+///     world.bodies[ball].set_next_kinematic_translation(Vector::new(0.0, y, 0.0));
+///     set.step(&mut world);
+/// }
+///
+/// // The centre vertex (12) is the only one inside the ball: it is held on the ball's surface.
+/// let surface = &set.get(plate).unwrap().surface;
+/// assert!(surface.is_held(12));
+/// assert!((surface.displacement(12) - Vector::new(0.0, -0.02, 0.0)).length() < 1e-3);
+/// // The plate pushes the ball back up with its centre vertex's spring force.
+/// let reaction = set.tool_reaction(tool).unwrap();
+/// assert_eq!(reaction.held_vertices, 1);
+/// assert!(reaction.force.y > 0.0);
+/// assert!((reaction.force - surface.internal_force(12)).length() < 0.05 * reaction.force.y);
+/// ```
 pub struct SurfaceSet {
     entries: Vec<(u32, Option<AttachedSurface>)>,
     tools: HashMap<ColliderHandle, ToolState>,
+}
+
+impl std::fmt::Debug for SurfaceSet {
+    /// The attached surfaces (handle order) and the registered tools (collider-handle order)
+    /// with their last reactions.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let surfaces: Vec<&AttachedSurface> = self
+            .entries
+            .iter()
+            .filter_map(|(_, e)| e.as_ref())
+            .collect();
+        let mut tools: Vec<(ColliderHandle, ToolReaction)> =
+            self.tools.iter().map(|(&h, t)| (h, t.reaction)).collect();
+        tools.sort_by_key(|(h, _)| h.into_raw_parts());
+        f.debug_struct("SurfaceSet")
+            .field("surfaces", &surfaces)
+            .field("tools", &tools)
+            .finish()
+    }
 }
 
 impl Default for SurfaceSet {

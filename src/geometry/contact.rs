@@ -82,6 +82,33 @@ impl ContactPatch {
 ///
 /// Apply [`ContactConfiguration::reversing_vector`] to the moving object's translation to bring
 /// it back, along its own trajectory, to the configuration where it first touched.
+///
+/// # Example
+/// A unit cube, half over the edge of a slab whose top is at `y = 0`, fell from `y = 0.8` to
+/// `y = 0.3` over the step and sinks 0.2 m into it: it first touched at 60 % of the step, centre
+/// at `y = 0.5`, with the half of its bottom face that lies over the slab.
+/// ```
+/// use rapier_touch::prelude::*;
+/// let slab = TouchMesh::from_shape(&Cuboid::new(Vector::new(1.0, 0.5, 1.0))).unwrap();
+/// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
+/// let slab_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+/// let now = Pose::from_translation(Vector::new(1.0, 0.3, 0.0));
+/// let before = Pose::from_translation(Vector::new(1.0, 0.8, 0.0));
+/// let c = Reconstructor::default()
+///     .reconstruct(&slab, &slab_pose, &cube, &now, &before)
+///     .unwrap();
+/// assert_eq!(c.state, TouchState::Penetrating);
+/// assert_eq!(c.direction_source, DirectionSource::Trajectory);
+/// assert!((c.direction - Vector::NEG_Y).length() < 1e-6);
+/// assert!(c.on_trajectory);
+/// assert!((c.time_of_impact.unwrap() - 0.6).abs() < 1e-4);
+/// assert!((c.depth - 0.2).abs() < 1e-5);
+/// assert!((c.touch_pose.translation - Vector::new(1.0, 0.5, 0.0)).length() < 1e-5);
+/// // The touching region: the half of the cube's bottom that lies over the slab.
+/// let patch = &c.patches[0];
+/// assert_eq!(patch.kind, ContactKind::Face);
+/// assert!((patch.center() - Vector::new(0.75, 0.0, 0.0)).length() < 1e-4);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContactConfiguration {
     /// The configuration at the current pose.

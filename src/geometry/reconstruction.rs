@@ -66,6 +66,32 @@ pub enum ReconstructionError {
 }
 
 /// Tuning of [`Reconstructor`].
+///
+/// # Example
+/// A cube that did not move over the step (`D = 0`) but overlaps a slab by 0.1 m, off the
+/// slab's centre: by default it is pushed out away from the slab's centre (diagonally, further
+/// than 0.1 m); with [`ReconstructionOptions::zero_motion_direction`] set to "down" it is
+/// pushed straight up by the overlap.
+/// ```
+/// use rapier_touch::prelude::*;
+/// let slab = TouchMesh::from_shape(&Cuboid::new(Vector::new(2.0, 0.5, 2.0))).unwrap();
+/// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
+/// let slab_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+/// let pose = Pose::from_translation(Vector::new(1.0, 0.4, 0.0)); // bottom at y = -0.1
+///
+/// let mut rec = Reconstructor::default();
+/// let c = rec.reconstruct(&slab, &slab_pose, &cube, &pose, &pose).unwrap();
+/// assert_eq!(c.direction_source, DirectionSource::ZeroMotionFallback);
+/// assert!(c.reversing_vector.x > 0.0 && c.depth > 0.1 + 1e-3);
+///
+/// rec.options = ReconstructionOptions {
+///     zero_motion_direction: Some(Vector::NEG_Y),
+///     ..Default::default()
+/// };
+/// let c = rec.reconstruct(&slab, &slab_pose, &cube, &pose, &pose).unwrap();
+/// assert_eq!(c.state, TouchState::Penetrating);
+/// assert!((c.reversing_vector - Vector::new(0.0, 0.1, 0.0)).length() < 1e-5);
+/// ```
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct ReconstructionOptions {
     /// Relative tolerance, times the larger mesh's bounding-box diagonal: touches closer than
@@ -127,6 +153,15 @@ pub struct Reconstructor {
     /// The options used by every query.
     pub options: ReconstructionOptions,
     ws: Workspace,
+}
+
+impl std::fmt::Debug for Reconstructor {
+    /// The options; the scratch memory is left out.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Reconstructor")
+            .field("options", &self.options)
+            .finish_non_exhaustive()
+    }
 }
 
 #[derive(Default, Clone)]

@@ -498,6 +498,30 @@ impl TouchMesh {
 /// smallest bounding-box edge of both objects cannot carry one through the other.
 ///
 /// Zero when one of the meshes is flat; see [`TouchMesh::min_extent`].
+///
+/// # Example
+/// A 20 cm cube crossing a 10 cm slab: one 40 cm step goes through it, steps shorter than the
+/// safe length end inside it first.
+/// ```
+/// use rapier_touch::prelude::*;
+/// let slab = TouchMesh::from_shape(&Cuboid::new(Vector::new(1.0, 0.05, 1.0))).unwrap();
+/// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.1))).unwrap();
+/// let step = safe_step_length(&slab, &cube);
+/// assert!((step - 0.1).abs() < 1e-6); // the slab's thickness
+///
+/// let at = |y: f32| Pose::from_translation(Vector::new(0.0, y, 0.0));
+/// let mut rec = Reconstructor::default();
+/// let c = rec.reconstruct(&slab, &Pose::IDENTITY, &cube, &at(-0.2), &at(0.2)).unwrap();
+/// assert_eq!(c.state, TouchState::Perforated);
+///
+/// let first_meeting = (0..10)
+///     .map(|i| {
+///         let (from, to) = (0.2 - i as f32 * 0.9 * step, 0.2 - (i + 1) as f32 * 0.9 * step);
+///         rec.reconstruct(&slab, &Pose::IDENTITY, &cube, &at(to), &at(from)).unwrap().state
+///     })
+///     .find(|&s| s != TouchState::Separated);
+/// assert_eq!(first_meeting, Some(TouchState::Penetrating));
+/// ```
 pub fn safe_step_length(a: &TouchMesh, b: &TouchMesh) -> Real {
     a.min_extent().min(b.min_extent())
 }

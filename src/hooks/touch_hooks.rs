@@ -90,6 +90,40 @@ pub(crate) fn meshed_exactly(shape: &dyn parry3d::shape::Shape) -> bool {
 
 /// Counters of what the hooks did during the last step (they never panic; what they skip is
 /// counted here).
+///
+/// # Example
+/// A box that ends its step about 2 mm deep in a slab (deeper than the slop) has its manifold
+/// rewritten at the start of the next step:
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::rapier3d::prelude::*;
+///
+/// let mut world = PhysicsWorld::default();
+/// TouchPipeline::configure(&mut world.integration_parameters);
+/// world.integration_parameters.max_ccd_substeps = 0;
+/// let hooks = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+/// let slab = ColliderBuilder::cuboid(2.0, 0.5, 2.0).translation(Vector::new(0.0, -0.5, 0.0));
+/// world.insert_collider(slab.active_hooks(hooks), None);
+/// let body = world.insert_body(
+///     RigidBodyBuilder::dynamic()
+///         .translation(Vector::new(0.0, 0.45, 0.0))
+///         .linvel(Vector::new(0.0, -12.0, 0.0)),
+/// );
+/// let cube = ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(hooks);
+/// world.insert_collider(cube, Some(body));
+/// // Hooks only (no step guard): the box ends its first step in the slab...
+/// let mut touch = TouchPipeline::new(());
+/// touch.options.correct_poses = false;
+/// touch.step(&mut world);
+/// assert_eq!(touch.hooks.counters(), HookCounters::default());
+/// let bottom = world.bodies[body].translation().y - 0.25;
+/// assert!(bottom < -TouchOptions::default().penetration_slop);
+/// // ... and at the start of the next one the hooks rewrite its manifold with the first touch.
+/// touch.step(&mut world);
+/// let counters = touch.hooks.counters();
+/// assert_eq!(counters, HookCounters { rewritten: 1, dropped: 0, skipped: 0 });
+/// assert!(world.bodies[body].linvel().y > 0.0); // pushed back out
+/// ```
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub struct HookCounters {
     /// Manifolds whose solver contacts were moved onto the reconstructed first touch.
@@ -136,6 +170,48 @@ pub struct HookCounters {
 ///   contact softness is stiff. [`super::TouchPipeline`] therefore also corrects poses between
 ///   steps; the hooks give the solver the right normal and points.
 /// - Set `IntegrationParameters::contact_clustering = false`, or mesh manifolds arrive merged.
+///
+/// # Example
+/// Your hooks run after the crate's, and the whole pipeline obeys them: a floor whose pairs
+/// your `filter_contact_pair` refuses lets a box fall through, past the step guard too.
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::rapier3d::prelude::*;
+///
+/// /// Your own hooks: refuse every contact pair.
+/// struct Ghost;
+/// impl PhysicsHooks for Ghost {
+///     fn filter_contact_pair(&self, _: &PairFilterContext) -> Option<SolverFlags> {
+///         None
+///     }
+/// }
+///
+/// /// Drops a box on a floor whose pairs go through your `filter_contact_pair`; its final height.
+/// fn drop_box<H: PhysicsHooks>(touch: &mut TouchPipeline<H>) -> Real {
+///     let mut world = PhysicsWorld::default();
+///     TouchPipeline::configure(&mut world.integration_parameters);
+///     let hooks = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+///     let floor = ColliderBuilder::cuboid(2.0, 0.05, 2.0)
+///         .active_hooks(hooks | ActiveHooks::FILTER_CONTACT_PAIRS);
+///     world.insert_collider(floor, None);
+///     let start = Vector::new(0.0, 1.0, 0.0);
+///     let body = world.insert_body(RigidBodyBuilder::dynamic().translation(start));
+///     let cube = ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(hooks);
+///     world.insert_collider(cube, Some(body));
+///     for _ in 0..60 {
+///         touch.step(&mut world);
+///     }
+///     world.bodies[body].translation().y
+/// }
+///
+/// // No hooks of yours (`()`): the box lands on the floor, its centre at 0.05 + 0.25.
+/// assert!((drop_box(&mut TouchPipeline::new(())) - 0.3).abs() < 2e-3);
+/// // Yours, forwarded by the `TouchHooks` and obeyed by the step guard: it falls through.
+/// let mut touch = TouchPipeline::new(Ghost);
+/// let _: &TouchHooks<Ghost> = &touch.hooks;
+/// assert!(drop_box(&mut touch) < -1.0);
+/// assert_eq!(touch.hooks.counters(), HookCounters::default()); // nothing to rewrite
+/// ```
 pub struct TouchHooks<H: PhysicsHooks = ()> {
     /// The user's hooks, called after this crate's.
     pub inner: H,
@@ -148,6 +224,21 @@ pub struct TouchHooks<H: PhysicsHooks = ()> {
     rewritten: AtomicUsize,
     dropped: AtomicUsize,
     skipped: AtomicUsize,
+}
+
+impl<H: PhysicsHooks> std::fmt::Debug for TouchHooks<H> {
+    /// Your hooks by type name, the settings, the sizes of the caches and the last step's
+    /// counters (not the cached meshes and reconstructions).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TouchHooks")
+            .field("inner", &std::any::type_name::<H>())
+            .field("meshes", &self.meshes.len())
+            .field("prev_poses", &self.prev_poses.len())
+            .field("options", &self.options)
+            .field("slop", &self.slop)
+            .field("counters", &self.counters())
+            .finish_non_exhaustive()
+    }
 }
 
 impl Default for TouchHooks<()> {

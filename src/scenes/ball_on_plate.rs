@@ -52,6 +52,23 @@ pub struct BallOnPlateScene {
 
 stepped_soft_scene!(BallOnPlateScene, 5.0);
 
+impl std::fmt::Debug for BallOnPlateScene {
+    /// The world's sizes, the set and the handles; the meshes as counts.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BallOnPlateScene")
+            .field("world", &super::WorldSummary(&self.world))
+            .field("set", &self.set)
+            .field("plate", &self.plate)
+            .field("plate_collider", &self.plate_collider)
+            .field("ball", &self.ball)
+            .field("ball_collider", &self.ball_collider)
+            .field("mesh_vertices", &self.mesh.vertices.len())
+            .field("rim", &self.rim.len())
+            .field("steps", &self.steps)
+            .finish()
+    }
+}
+
 impl BallOnPlateScene {
     /// Side of the square plate (m).
     pub const SIZE: Real = 0.3;

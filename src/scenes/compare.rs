@@ -150,6 +150,21 @@ pub struct CompareWorld {
     mover_vertices: Vec<Vector>,
 }
 
+impl std::fmt::Debug for CompareWorld {
+    /// The scene, the world's sizes and the handles; the mover's vertices as a count.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CompareWorld")
+            .field("scene", &self.scene)
+            .field("world", &super::WorldSummary(&self.world))
+            .field("mover", &self.mover)
+            .field("mover_collider", &self.mover_collider)
+            .field("floor", &self.floor)
+            .field("plate", &self.plate)
+            .field("mover_vertices", &self.mover_vertices.len())
+            .finish()
+    }
+}
+
 /// What [`CompareWorld::measure`] finds after a step.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct CompareMeasure {

@@ -72,6 +72,21 @@ pub use stress::{
     StressWorld,
 };
 
+/// `Debug` of a [`PhysicsWorld`] (which has none): its sizes, time step and gravity, not its
+/// contents. The scenes' `Debug` impls show their world through it.
+pub(crate) struct WorldSummary<'a>(pub(crate) &'a PhysicsWorld);
+
+impl std::fmt::Debug for WorldSummary<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PhysicsWorld")
+            .field("bodies", &self.0.bodies.len())
+            .field("colliders", &self.0.colliders.len())
+            .field("dt", &self.0.integration_parameters.dt)
+            .field("gravity", &self.0.gravity)
+            .finish_non_exhaustive()
+    }
+}
+
 /// Attaches `surface` (positions in world coordinates) to a new fixed body at the origin of
 /// `world`, in a new [`SurfaceSet`], with `substeps` surface steps per rigid step and a TriMesh
 /// collider that follows the deformed surface. Returns the set, the surface's handle and its

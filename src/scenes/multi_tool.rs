@@ -282,6 +282,23 @@ pub struct MultiToolScene {
 
 stepped_soft_scene!(MultiToolScene, 7.5);
 
+impl std::fmt::Debug for MultiToolScene {
+    /// The world's sizes, the set, the handles and the tools; the meshes as counts.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MultiToolScene")
+            .field("world", &super::WorldSummary(&self.world))
+            .field("set", &self.set)
+            .field("organ", &self.organ)
+            .field("organ_collider", &self.organ_collider)
+            .field("tools", &self.tools)
+            .field("flat_vertices", &self.flat.vertices.len())
+            .field("base", &self.base.len())
+            .field("targets", &self.targets)
+            .field("steps", &self.steps)
+            .finish_non_exhaustive()
+    }
+}
+
 impl MultiToolScene {
     /// Peak height of the dome (m).
     pub const DOME_HEIGHT: Real = 0.03;

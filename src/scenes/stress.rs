@@ -93,6 +93,16 @@ pub struct StressWorld {
     pub floor: ColliderHandle,
 }
 
+impl std::fmt::Debug for StressWorld {
+    /// The world's sizes (a `PhysicsWorld` has no `Debug`) and the floor.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StressWorld")
+            .field("world", &super::WorldSummary(&self.world))
+            .field("floor", &self.floor)
+            .finish()
+    }
+}
+
 /// Builds `scene` with rapier's default integration parameters.
 pub fn stress_world(scene: StressScene) -> StressWorld {
     let mut world = PhysicsWorld::default();

@@ -8,6 +8,7 @@ mod every_scale;
 mod fig4;
 mod mesh_inputs;
 mod pipeline;
+mod prelude;
 mod rapier_semantics;
 mod reconstruction_bad_input;
 mod reconstruction_properties;
