@@ -147,6 +147,9 @@ struct ToolState {
     applied: (Vector, Vector),
     /// The device pose of the last haptic step.
     haptic_prev: Option<Pose>,
+    /// Whether the tool's solver-group filter held [`SURFACE_SOLVER_GROUP`] before
+    /// [`SurfaceSet::add_tool`] dropped it (restored by [`SurfaceSet::remove_tool`]).
+    had_surface_group: bool,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -359,11 +362,24 @@ impl SurfaceSet {
         e.1.as_mut()
     }
 
-    /// Registers collider `tool` as a tool pressing into every surface of the set, and drops
-    /// [`SURFACE_SOLVER_GROUP`] from its solver-group filter.
+    /// Registers collider `tool` as a tool pressing into every surface of the set.
+    ///
+    /// Two things change on the tool, both undone by [`SurfaceSet::remove_tool`]:
+    /// - its solver-group filter loses [`SURFACE_SOLVER_GROUP`] (the group of the surfaces'
+    ///   colliders), so rapier's rigid contact with a surface's collider does not fight the
+    ///   surface's own response (rapier still reports the pair; it only stops solving it);
+    /// - from the next [`SurfaceSet::step`] on, the surfaces' reaction is added to its body's
+    ///   user force and torque (a dynamic body).
+    ///
+    /// Adding a tool twice changes nothing more.
     pub fn add_tool(&mut self, tool: ColliderHandle, world: &mut PhysicsWorld) {
+        if self.tools.contains_key(&tool) {
+            return;
+        }
+        let mut had_surface_group = false;
         if let Some(c) = world.colliders.get_mut(tool) {
             let g = c.solver_groups();
+            had_surface_group = g.filter.contains(SURFACE_SOLVER_GROUP);
             c.set_solver_groups(InteractionGroups::new(
                 g.memberships,
                 g.filter & !SURFACE_SOLVER_GROUP,
@@ -377,13 +393,38 @@ impl SurfaceSet {
                 reaction: ToolReaction::default(),
                 applied: (Vector::ZERO, Vector::ZERO),
                 haptic_prev: None,
+                had_surface_group,
             },
         );
     }
 
-    /// Stops treating `tool` as a tool (the vertices it held are released).
-    pub fn remove_tool(&mut self, tool: ColliderHandle) {
-        self.tools.remove(&tool);
+    /// Stops treating `tool` as a tool: the vertices it held are released, the force and
+    /// torque the set added to its body are taken back, and its solver-group filter gets
+    /// [`SURFACE_SOLVER_GROUP`] back if it had it before [`SurfaceSet::add_tool`] (so rapier
+    /// solves its contacts with the surfaces' colliders again). A tool whose collider left the
+    /// world is simply forgotten.
+    pub fn remove_tool(&mut self, tool: ColliderHandle, world: &mut PhysicsWorld) {
+        let Some(state) = self.tools.remove(&tool) else {
+            return;
+        };
+        let Some(c) = world.colliders.get_mut(tool) else {
+            return;
+        };
+        if state.had_surface_group {
+            let g = c.solver_groups();
+            c.set_solver_groups(InteractionGroups::new(
+                g.memberships,
+                g.filter | SURFACE_SOLVER_GROUP,
+                g.test_mode,
+            ));
+        }
+        let parent = c.parent();
+        if let Some(b) = parent.and_then(|p| world.bodies.get_mut(p)) {
+            if b.is_dynamic() && state.applied != (Vector::ZERO, Vector::ZERO) {
+                b.add_force(-state.applied.0, true);
+                b.add_torque(-state.applied.1, true);
+            }
+        }
     }
 
     /// The reaction on `tool` after the last step.

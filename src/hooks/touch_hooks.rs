@@ -224,6 +224,8 @@ pub struct TouchHooks<H: PhysicsHooks = ()> {
     rewritten: AtomicUsize,
     dropped: AtomicUsize,
     skipped: AtomicUsize,
+    /// The counters of the steps before the last one, summed.
+    earlier: HookCounters,
 }
 
 impl<H: PhysicsHooks> std::fmt::Debug for TouchHooks<H> {
@@ -237,6 +239,7 @@ impl<H: PhysicsHooks> std::fmt::Debug for TouchHooks<H> {
             .field("options", &self.options)
             .field("slop", &self.slop)
             .field("counters", &self.counters())
+            .field("total_counters", &self.total_counters())
             .finish_non_exhaustive()
     }
 }
@@ -261,10 +264,12 @@ impl<H: PhysicsHooks> TouchHooks<H> {
             rewritten: AtomicUsize::new(0),
             dropped: AtomicUsize::new(0),
             skipped: AtomicUsize::new(0),
+            earlier: HookCounters::default(),
         }
     }
 
-    /// What the hooks did during the last step.
+    /// What the hooks did during the last step ([`TouchHooks::total_counters`]: over the
+    /// whole run).
     pub fn counters(&self) -> HookCounters {
         HookCounters {
             rewritten: self.rewritten.load(Ordering::Relaxed),
@@ -273,8 +278,20 @@ impl<H: PhysicsHooks> TouchHooks<H> {
         }
     }
 
-    /// Clears the per-step cache and counters (called by the pipeline before each step).
+    /// What the hooks did since they were created, the last step included.
+    pub fn total_counters(&self) -> HookCounters {
+        let last = self.counters();
+        HookCounters {
+            rewritten: self.earlier.rewritten.saturating_add(last.rewritten),
+            dropped: self.earlier.dropped.saturating_add(last.dropped),
+            skipped: self.earlier.skipped.saturating_add(last.skipped),
+        }
+    }
+
+    /// Clears the per-step cache and counters (called by the pipeline before each step); the
+    /// counters are added to the run's totals first.
     pub(crate) fn begin_step(&mut self) {
+        self.earlier = self.total_counters();
         self.cache.get_mut().map(|c| c.clear()).unwrap_or(());
         *self.rewritten.get_mut() = 0;
         *self.dropped.get_mut() = 0;

@@ -4,6 +4,7 @@
 //! surface on a moving kinematic body follows it.
 
 use crate::common::{dirichlet_solve, edge_laplacian};
+use rapier_touch::coupling::SURFACE_SOLVER_GROUP;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
 
@@ -267,6 +268,47 @@ fn dynamic_ball_comes_to_rest_on_a_soft_plate() {
     );
 }
 
+/// `remove_tool` undoes what `add_tool` did: a ball resting on the plate gets its surface
+/// reaction as a user force while it is a tool; removed, its user force and torque are back to
+/// zero and its solver-group filter holds the surfaces' group again, so rapier solves its
+/// contact with the plate's collider and it stays on the plate instead of sinking through.
+#[test]
+fn removing_a_tool_gives_back_its_force_and_solver_groups() {
+    let (mut world, mut set, _) = world_with_plate(8);
+    world.gravity = Vector::new(0.0, -9.81, 0.0);
+    let ball =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.5, 0.2, 0.5)));
+    let c = world.insert_collider(ColliderBuilder::ball(0.06).density(100.0), Some(ball));
+    let groups = world.colliders[c].solver_groups();
+    assert!(groups.filter.contains(SURFACE_SOLVER_GROUP));
+    set.add_tool(c, &mut world);
+    set.add_tool(c, &mut world); // twice: no further change
+    assert!(!world.colliders[c]
+        .solver_groups()
+        .filter
+        .contains(SURFACE_SOLVER_GROUP));
+    for _ in 0..240 {
+        set.step(&mut world);
+    }
+    let weight = world.bodies[ball].mass() * 9.81;
+    // Resting: the set's force on the ball carries (about) its weight.
+    assert!((world.bodies[ball].user_force().y - weight).abs() < 0.2 * weight);
+    set.remove_tool(c, &mut world);
+    assert_eq!(world.colliders[c].solver_groups(), groups);
+    // (Zero up to the rounding of the per-step differences the set added.)
+    assert!(world.bodies[ball].user_force().length() < 1e-5 * weight);
+    assert!(world.bodies[ball].user_torque().length() < 1e-5 * weight);
+    assert!(set.tool_reaction(c).is_none());
+    // rapier now holds the ball on the plate's collider (rigidly, as any collider).
+    for _ in 0..120 {
+        set.step(&mut world);
+    }
+    assert!(
+        world.bodies[ball].translation().y > 0.0,
+        "fell through the plate's collider"
+    );
+}
+
 #[test]
 fn surface_on_a_moving_kinematic_body_follows_it() {
     let mut world = PhysicsWorld::default();
@@ -323,7 +365,7 @@ fn removing_a_tool_or_the_surface_mid_run_works() {
     assert!(set.tool_reaction(tool).unwrap().held_vertices > 0);
     // Remove one tool's collider from the world, and the other from the set.
     world.remove_collider(tool);
-    set.remove_tool(tool2);
+    set.remove_tool(tool2, &mut world);
     for _ in 0..300 {
         set.step(&mut world);
     }
