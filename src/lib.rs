@@ -83,6 +83,7 @@ pub mod surface;
 pub mod prelude {
     pub use crate::coupling::{
         AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,
+        ToolTouchEvent,
     };
     pub use crate::geometry::{
         safe_step_length, ContactConfiguration, ContactKind, ContactPatch, ContactPoint,

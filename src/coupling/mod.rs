@@ -2,7 +2,11 @@
 //! to rigid bodies, gives them colliders that follow the deformation, lets any number of rigid
 //! tools press into them, and returns each tool's reaction force (two-way for dynamic tools).
 
+mod events;
+mod holding;
 mod surface_set;
+
+pub use events::ToolTouchEvent;
 
 pub use surface_set::{
     AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,

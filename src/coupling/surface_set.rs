@@ -1,9 +1,9 @@
 //! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
 
+use super::events::{ToolTouchEvent, TouchTracker};
+use super::holding::{attached_with_pose, lerp_pose, surface_substep};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
-use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::query::Ray;
 use parry3d::shape::{SharedShape, TriMeshFlags};
 use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderBuilder, ColliderHandle, Group, InteractionGroups};
@@ -35,8 +35,15 @@ pub enum CouplingError {
 /// A handle to a surface in a [`SurfaceSet`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 pub struct SurfaceHandle {
-    index: u32,
-    generation: u32,
+    pub(super) index: u32,
+    pub(super) generation: u32,
+}
+
+impl SurfaceHandle {
+    /// The index and generation, for ordering.
+    pub(super) fn raw(&self) -> (u32, u32) {
+        (self.index, self.generation)
+    }
 }
 
 /// How a surface is attached.
@@ -99,12 +106,12 @@ pub struct ToolReaction {
 pub struct AttachedSurface {
     /// The deformable model (its positions live in the body's frame).
     pub surface: MassSpringSurface,
-    body: RigidBodyHandle,
+    pub(super) body: RigidBodyHandle,
     collider: Option<ColliderHandle>,
     substeps: u32,
-    scratch: Vec<Vector>,
-    before: Vec<Vector>,
-    was_held: Vec<bool>,
+    pub(super) scratch: Vec<Vector>,
+    pub(super) before: Vec<Vector>,
+    pub(super) was_held: Vec<bool>,
 }
 
 impl std::fmt::Debug for AttachedSurface {
@@ -229,6 +236,7 @@ struct ToolState {
 pub struct SurfaceSet {
     entries: Vec<(u32, Option<AttachedSurface>)>,
     tools: HashMap<ColliderHandle, ToolState>,
+    touch: TouchTracker,
 }
 
 impl std::fmt::Debug for SurfaceSet {
@@ -262,6 +270,7 @@ impl SurfaceSet {
         Self {
             entries: Vec::new(),
             tools: HashMap::new(),
+            touch: TouchTracker::default(),
         }
     }
 
@@ -427,6 +436,52 @@ impl SurfaceSet {
         }
     }
 
+    /// The tools that started or stopped touching a surface, step by step, since the last
+    /// drain (oldest first): a tool touches a surface while it holds at least one of its
+    /// vertices at the end of a [`SurfaceSet::step`]. [`SurfaceSet::haptic_step`] does not
+    /// record events; a removed tool or surface gets its `Stopped` at the next step.
+    ///
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::rapier3d::prelude::*;
+    /// use rapier_touch::surface::meshing::{plate, plate_rim};
+    ///
+    /// let mut world = PhysicsWorld { gravity: Vector::ZERO, ..Default::default() };
+    /// let fixed = world.insert_body(RigidBodyBuilder::fixed());
+    /// let surface = MassSpringSurfaceBuilder::from_mesh(&plate(0.4, 0.4, 4, 4))
+    ///     .pinned(plate_rim(4, 4))
+    ///     .build()
+    ///     .unwrap();
+    /// let mut set = SurfaceSet::new();
+    /// let plate = set.insert(surface, fixed, &mut world, AttachOptions::default()).unwrap();
+    /// let ball = world.insert_body(
+    ///     RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(0.0, 0.1, 0.0)),
+    /// );
+    /// let tool = world.insert_collider(ColliderBuilder::ball(0.05), Some(ball));
+    /// set.add_tool(tool, &mut world);
+    /// // Down through the plate's plane for half a second, then back up.
+    /// world.bodies[ball].set_linvel(Vector::new(0.0, -0.15, 0.0), true);
+    /// for _ in 0..30 {
+    ///     set.step(&mut world);
+    /// }
+    /// world.bodies[ball].set_linvel(Vector::new(0.0, 0.3, 0.0), true);
+    /// for _ in 0..30 {
+    ///     set.step(&mut world);
+    /// }
+    /// let events: Vec<ToolTouchEvent> = set.drain_touch_events().collect();
+    /// assert_eq!(
+    ///     events,
+    ///     [
+    ///         ToolTouchEvent::Started { tool, surface: plate },
+    ///         ToolTouchEvent::Stopped { tool, surface: plate },
+    ///     ]
+    /// );
+    /// assert_eq!(set.drain_touch_events().count(), 0);
+    /// ```
+    pub fn drain_touch_events(&mut self) -> impl Iterator<Item = ToolTouchEvent> + '_ {
+        self.touch.drain()
+    }
+
     /// The reaction on `tool` after the last step.
     pub fn tool_reaction(&self, tool: ColliderHandle) -> Option<ToolReaction> {
         self.tools.get(&tool).map(|t| t.reaction)
@@ -460,7 +515,7 @@ impl SurfaceSet {
             .chain(std::iter::once((tool, start, device)))
             .collect();
         let mut total = ToolReaction::default();
-        for (s, body_pose) in attached_with_pose(&mut self.entries, world) {
+        for (_, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let h = s.surface.dt();
             for (th, r) in surface_substep(s, world, &body_pose, &others, h) {
                 if th == tool {
@@ -516,7 +571,8 @@ impl SurfaceSet {
             })
             .collect();
         let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
-        for (s, body_pose) in attached_with_pose(&mut self.entries, world) {
+        let mut touching = parry3d::utils::hashset::HashSet::default();
+        for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
             let h = dt / n as Real;
             for k in 1..=n {
@@ -531,6 +587,9 @@ impl SurfaceSet {
                     m.0 += r.force / n as Real;
                     m.1 += r.torque / n as Real;
                     if k == n {
+                        if r.held_vertices > 0 {
+                            touching.insert((th, handle));
+                        }
                         if let Some(t) = self.tools.get_mut(&th) {
                             t.reaction.force += r.force;
                             t.reaction.torque += r.torque;
@@ -540,6 +599,7 @@ impl SurfaceSet {
                 }
             }
         }
+        self.touch.update(touching);
         // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step).
         for (_, entry) in self.entries.iter_mut() {
             let Some(s) = entry.as_mut() else {
@@ -580,285 +640,4 @@ impl SurfaceSet {
             }
         }
     }
-}
-
-/// The attached surfaces whose body is still in the world, with that body's pose.
-fn attached_with_pose<'a>(
-    entries: &'a mut [(u32, Option<AttachedSurface>)],
-    world: &'a PhysicsWorld,
-) -> impl Iterator<Item = (&'a mut AttachedSurface, Pose)> + 'a {
-    entries.iter_mut().filter_map(move |(_, e)| {
-        let s = e.as_mut()?;
-        let pose = *world.bodies.get(s.body)?.position();
-        Some((s, pose))
-    })
-}
-
-/// One surface substep: the surface steps, then each tool (poses in world, at the start and the
-/// end of the substep) holds the vertices it contains. Returns each tool's reaction (world).
-fn surface_substep(
-    s: &mut AttachedSurface,
-    world: &PhysicsWorld,
-    body_pose: &Pose,
-    tools: &[(ColliderHandle, Pose, Pose)],
-    h: Real,
-) -> Vec<(ColliderHandle, ToolReaction)> {
-    let inv = body_pose.inverse();
-    s.surface.positions_into(&mut s.before);
-    s.surface.step();
-    s.was_held.clear();
-    s.was_held
-        .extend((0..s.surface.num_vertices() as u32).map(|i| s.surface.is_held(i)));
-    s.surface.release_all();
-    // A tool moves only the vertices it holds, which later tools skip: one read of the
-    // positions serves every tool.
-    s.surface.positions_into(&mut s.scratch);
-    let mut out = Vec::with_capacity(tools.len());
-    for (th, start, end) in tools {
-        let Some(tool) = world.colliders.get(*th) else {
-            continue;
-        };
-        // Vertices follow a tool whose motion is prescribed (kinematic or no body); a dynamic
-        // tool's own motion comes from the surface's force, so it is not chased.
-        let follow = tool
-            .parent()
-            .and_then(|b| world.bodies.get(b))
-            .is_none_or(|b| !b.is_dynamic());
-        let (force, arm_sum, held) = hold_vertices(
-            follow,
-            &mut s.surface,
-            tool.shape(),
-            &(inv * *end),
-            &(inv * *start),
-            h,
-            &s.before,
-            &s.was_held,
-            &s.scratch,
-        );
-        let world_force = body_pose.rotation * force;
-        let centre = tool
-            .parent()
-            .and_then(|b| world.bodies.get(b))
-            .map(|b| b.center_of_mass())
-            .unwrap_or(end.translation);
-        // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
-        let torque =
-            body_pose.rotation * arm_sum - (centre - body_pose.translation).cross(world_force);
-        out.push((
-            *th,
-            ToolReaction {
-                force: world_force,
-                torque,
-                mean_force: world_force,
-                held_vertices: held,
-            },
-        ));
-    }
-    out
-}
-
-fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
-    Pose::from_parts(
-        a.translation.lerp(b.translation, t),
-        a.rotation.slerp(b.rotation, t),
-    )
-}
-
-/// Moves every surface vertex the tool contains out of it and holds it there; returns the force
-/// the held vertices push the tool with, `Σ p × f` (surface frame) and how many vertices it
-/// holds.
-///
-/// A vertex that just entered is walked back along its inverse trajectory relative to the tool
-/// (eq. 1-2 for one vertex): from where it is, back along its own motion over the substep minus
-/// the tool's, to the tool's boundary. A vertex already in contact slides: it is snapped to the
-/// nearest boundary point. The contact is frictionless: a held vertex keeps its own tangential
-/// velocity and takes the tool's normal velocity.
-#[allow(clippy::too_many_arguments)]
-fn hold_vertices(
-    follow: bool,
-    surface: &mut MassSpringSurface,
-    shape: &dyn parry3d::shape::Shape,
-    pose: &Pose,
-    before: &Pose,
-    h: Real,
-    prev_positions: &[Vector],
-    was_held: &[bool],
-    positions: &[Vector],
-) -> (Vector, Vector, usize) {
-    let aabb: Aabb = shape.compute_aabb(pose);
-    let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
-    let margin = 1e-6 * (1.0 + aabb.extents().max_element());
-    let motion = pose.translation - before.translation;
-    // A vertex held in the last substep moved on with the tool's old normal velocity; when the
-    // tool slowed down or turned back, that leaves it outside by up to the relative motion over
-    // the substep. It is still in contact (and snapped back) unless its springs pull it away
-    // (the push-only test below).
-    let mut held = Vec::new();
-    // (vertex, its free position and velocity) for vertices that followed the tool.
-    let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
-    for (i, p) in positions.iter().enumerate() {
-        let iu = i as u32;
-        let entering = !was_held.get(i).copied().unwrap_or(false);
-        let chase = follow && !entering;
-        let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
-        let slack = if chase {
-            own.length() + 2.0 * motion.length() + margin
-        } else {
-            0.0
-        };
-        let near = p.cmpge(aabb.mins - Vector::splat(slack)).all()
-            && p.cmple(aabb.maxs + Vector::splat(slack)).all();
-        if !near || surface.is_pinned(iu) || surface.is_held(iu) {
-            continue;
-        }
-        let rel = motion - own;
-        // In contact: inside the tool, or on its boundary (where the last substep left a held
-        // vertex) within a hair, or held before and left behind by the relative motion.
-        let gap = shape.distance_to_point(pose, *p, true);
-        if gap > margin {
-            if !chase || gap > rel.length() + motion.length() + margin {
-                continue;
-            }
-            followed.push((iu, *p, surface.velocity(iu)));
-        }
-        let nearest = nearest_on_boundary(shape, pose, *p);
-        let out = if entering && rel.length() > (nearest - *p).length() + margin {
-            exit_along(shape, pose, *p, rel.normalize()).unwrap_or(nearest)
-        } else {
-            nearest
-        };
-        if !out.is_finite() {
-            continue;
-        }
-        // The tool's outward normal at the contact point.
-        let local = pose.inverse_transform_point(out);
-        let n = pose.rotation * outward_normal(shape, local, margin);
-        // Frictionless: the tool sets the normal velocity only (that of the tool's material
-        // point under the vertex, rotation included).
-        let tool_velocity = if h > 0.0 {
-            (out - before.transform_point(local)) / h
-        } else {
-            Vector::ZERO
-        };
-        let v_own = surface.velocity(iu);
-        let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
-        if surface.set_state(iu, out, v).is_ok() {
-            let _ = surface.hold_sliding(iu, n);
-            held.push((iu, n));
-        }
-    }
-    // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
-    // stick to a receding tool) is let go. The tool receives the normal part of the others'
-    // spring and damper forces (the tangential part slides them).
-    let mut force = Vector::ZERO;
-    let mut moment = Vector::ZERO;
-    let mut count = 0;
-    for &(i, n) in &held {
-        let f = surface.internal_force(i).dot(n);
-        if f >= 0.0 {
-            surface.release(i);
-            // A vertex that only followed the tool separates where its own motion took it.
-            if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
-                let _ = surface.set_state(i, p, v);
-            }
-            continue;
-        }
-        let f = n * f;
-        force += f;
-        moment += surface.position(i).cross(f);
-        count += 1;
-    }
-    (force, moment, count)
-}
-
-/// The outward normal of a convex `shape` at `local`, a point on its boundary (shape frame).
-///
-/// A convex polyhedron gives the normal of its nearest face plane. Any other shape: a short ray
-/// cast from just outside the point, back toward the shape's centre, hits the boundary next to
-/// the point and returns the exact normal there (parry's feature normals at a boundary point
-/// are unreliable for cylinders and cones, and missing for capsules and round shapes).
-/// Fallbacks: the feature normal, then the direction from the shape's centre.
-fn outward_normal(shape: &dyn parry3d::shape::Shape, local: Vector, margin: Real) -> Vector {
-    if let Some((n, _)) = shape
-        .as_convex_polyhedron()
-        .and_then(|poly| closest_face(poly, local))
-    {
-        return n;
-    }
-    let aabb = shape.compute_local_aabb();
-    let centre = aabb.center();
-    let radial = (local - centre).try_normalize().unwrap_or(Vector::Y);
-    let eps = 1e-3 * aabb.extents().max_element() + 10.0 * margin;
-    let ray = Ray::new(local + radial * eps, -radial);
-    if let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, 2.0 * eps, true) {
-        let n = hit.normal;
-        if hit.time_of_impact > 0.0 && n.is_finite() && n.dot(radial) > 0.0 {
-            if let Some(n) = n.try_normalize() {
-                return n;
-            }
-        }
-    }
-    let (proj, feature) = shape.project_local_point_and_get_feature(local);
-    shape
-        .feature_normal_at_point(0, feature, proj.point)
-        .filter(|n| n.is_finite() && n.dot(radial) > 0.0)
-        .unwrap_or(radial)
-}
-
-/// The face of `poly` whose plane is nearest above or least below `local`: its outward normal
-/// and the signed distance of `local` to its plane. For a point inside the polyhedron that
-/// face holds the nearest boundary point.
-fn closest_face(poly: &parry3d::shape::ConvexPolyhedron, local: Vector) -> Option<(Vector, Real)> {
-    face_planes(poly)
-        .map(|(n, v)| (n, n.dot(local - v)))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-}
-
-/// Each face of `poly` as its outward normal and one of its vertices (shape frame).
-fn face_planes(
-    poly: &parry3d::shape::ConvexPolyhedron,
-) -> impl Iterator<Item = (Vector, Vector)> + '_ {
-    let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
-    poly.faces().iter().filter_map(move |f| {
-        let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
-        Some((f.normal, *v))
-    })
-}
-
-/// The nearest point of the tool's boundary to `p` (world). parry's projection of a point
-/// inside a convex polyhedron is approximate, so there the nearest face plane is used.
-fn nearest_on_boundary(shape: &dyn parry3d::shape::Shape, pose: &Pose, p: Vector) -> Vector {
-    if let Some(poly) = shape.as_convex_polyhedron() {
-        let local = pose.inverse_transform_point(p);
-        if let Some((n, d)) = closest_face(poly, local) {
-            if d <= 0.0 {
-                return pose.transform_point(local - n * d);
-            }
-        }
-    }
-    shape.project_point(pose, p, false).point
-}
-
-/// Where the ray from `p` (inside the tool, world) along the unit `d` leaves the tool. For a
-/// convex polyhedron the nearest exit plane is used (parry's ray cast from inside a support
-/// map is iterative and can stop early).
-fn exit_along(
-    shape: &dyn parry3d::shape::Shape,
-    pose: &Pose,
-    p: Vector,
-    d: Vector,
-) -> Option<Vector> {
-    if let Some(poly) = shape.as_convex_polyhedron() {
-        let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
-        let t = face_planes(poly)
-            .filter_map(|(n, v)| {
-                let along = n.dot(dl);
-                (along > 0.0).then(|| (-n.dot(local - v) / along).max(0.0))
-            })
-            .min_by(|a, b| a.total_cmp(b))?;
-        return Some(p + d * t);
-    }
-    shape
-        .cast_ray(pose, &Ray::new(p, d), Real::MAX, false)
-        .map(|t| p + d * t)
 }

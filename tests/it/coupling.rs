@@ -497,3 +497,62 @@ fn bad_tool_input_is_refused_or_harmless() {
     assert!((s.position(free) - (p + Vector::X * s.dt())).length() < 1e-6);
     assert!(s.hold_sliding(10_000, Vector::Y).is_err());
 }
+
+/// Touch events follow what the tools hold, step by step: two kinematic balls press the plate
+/// at different times, one leaves, the other is removed from the set while pressing. The events
+/// drained after each step are checked against the held-vertex counts read after that step.
+#[test]
+fn touch_events_follow_the_held_vertices() {
+    let (mut world, mut set, h) = world_with_plate(4);
+    let ball = |world: &mut PhysicsWorld, x: Real| {
+        let b = world.insert_body(
+            RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(x, 0.2, 0.5)),
+        );
+        world.insert_collider(ColliderBuilder::ball(0.06), Some(b));
+        b
+    };
+    let (a, b) = (ball(&mut world, 0.3), ball(&mut world, 0.7));
+    let tool = |world: &PhysicsWorld, body: RigidBodyHandle| world.bodies[body].colliders()[0];
+    let (ta, tb) = (tool(&world, a), tool(&world, b));
+    set.add_tool(ta, &mut world);
+    set.add_tool(tb, &mut world);
+    let mut was = [false, false];
+    let mut seen: Vec<ToolTouchEvent> = Vec::new();
+    for step in 0..240 {
+        // a: down from step 0, up from 60; b: down from step 40, removed at 150.
+        let va = if step < 60 { -0.3 } else { 0.6 };
+        let vb = if step < 40 { 0.0 } else { -0.3 };
+        world.bodies[a].set_linvel(Vector::new(0.0, va, 0.0), true);
+        world.bodies[b].set_linvel(Vector::new(0.0, vb, 0.0), true);
+        if step == 150 {
+            set.remove_tool(tb, &mut world);
+        }
+        set.step(&mut world);
+        let now = [ta, tb].map(|t| set.tool_reaction(t).is_some_and(|r| r.held_vertices > 0));
+        let events: Vec<ToolTouchEvent> = set.drain_touch_events().collect();
+        for (i, t) in [ta, tb].into_iter().enumerate() {
+            let expected = match (was[i], now[i]) {
+                (false, true) => Some(ToolTouchEvent::Started {
+                    tool: t,
+                    surface: h,
+                }),
+                (true, false) => Some(ToolTouchEvent::Stopped {
+                    tool: t,
+                    surface: h,
+                }),
+                _ => None,
+            };
+            let got: Vec<_> = events.iter().filter(|e| e.pair().0 == t).copied().collect();
+            assert_eq!(
+                got,
+                expected.into_iter().collect::<Vec<_>>(),
+                "step {step}, tool {i}"
+            );
+        }
+        was = now;
+        seen.extend(events);
+    }
+    // Each ball touched once and stopped once (b by its removal).
+    assert_eq!(seen.len(), 4, "{seen:?}");
+    assert_eq!(seen.iter().filter(|e| e.started()).count(), 2);
+}

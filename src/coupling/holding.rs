@@ -1,0 +1,311 @@
+//! How rigid tools hold the vertices of a surface in one surface substep: the surface steps,
+//! then every vertex inside a tool is walked back along its inverse trajectory relative to the
+//! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
+//! gets the reaction of the vertices it holds.
+
+use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
+use crate::math::{Pose, Real, Vector};
+use crate::surface::MassSpringSurface;
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::query::Ray;
+use rapier3d::geometry::ColliderHandle;
+use rapier3d::pipeline::PhysicsWorld;
+
+/// The attached surfaces whose body is still in the world, with that body's pose.
+pub(super) fn attached_with_pose<'a>(
+    entries: &'a mut [(u32, Option<AttachedSurface>)],
+    world: &'a PhysicsWorld,
+) -> impl Iterator<Item = (SurfaceHandle, &'a mut AttachedSurface, Pose)> + 'a {
+    entries
+        .iter_mut()
+        .enumerate()
+        .filter_map(move |(i, (generation, e))| {
+            let s = e.as_mut()?;
+            let pose = *world.bodies.get(s.body)?.position();
+            let handle = SurfaceHandle {
+                index: i as u32,
+                generation: *generation,
+            };
+            Some((handle, s, pose))
+        })
+}
+
+/// One surface substep: the surface steps, then each tool (poses in world, at the start and the
+/// end of the substep) holds the vertices it contains. Returns each tool's reaction (world).
+pub(super) fn surface_substep(
+    s: &mut AttachedSurface,
+    world: &PhysicsWorld,
+    body_pose: &Pose,
+    tools: &[(ColliderHandle, Pose, Pose)],
+    h: Real,
+) -> Vec<(ColliderHandle, ToolReaction)> {
+    let inv = body_pose.inverse();
+    s.surface.positions_into(&mut s.before);
+    s.surface.step();
+    s.was_held.clear();
+    s.was_held
+        .extend((0..s.surface.num_vertices() as u32).map(|i| s.surface.is_held(i)));
+    s.surface.release_all();
+    // A tool moves only the vertices it holds, which later tools skip: one read of the
+    // positions serves every tool.
+    s.surface.positions_into(&mut s.scratch);
+    let mut out = Vec::with_capacity(tools.len());
+    for (th, start, end) in tools {
+        let Some(tool) = world.colliders.get(*th) else {
+            continue;
+        };
+        // Vertices follow a tool whose motion is prescribed (kinematic or no body); a dynamic
+        // tool's own motion comes from the surface's force, so it is not chased.
+        let follow = tool
+            .parent()
+            .and_then(|b| world.bodies.get(b))
+            .is_none_or(|b| !b.is_dynamic());
+        let (force, arm_sum, held) = hold_vertices(
+            follow,
+            &mut s.surface,
+            tool.shape(),
+            &(inv * *end),
+            &(inv * *start),
+            h,
+            &s.before,
+            &s.was_held,
+            &s.scratch,
+        );
+        let world_force = body_pose.rotation * force;
+        let centre = tool
+            .parent()
+            .and_then(|b| world.bodies.get(b))
+            .map(|b| b.center_of_mass())
+            .unwrap_or(end.translation);
+        // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
+        let torque =
+            body_pose.rotation * arm_sum - (centre - body_pose.translation).cross(world_force);
+        out.push((
+            *th,
+            ToolReaction {
+                force: world_force,
+                torque,
+                mean_force: world_force,
+                held_vertices: held,
+            },
+        ));
+    }
+    out
+}
+
+pub(super) fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
+    Pose::from_parts(
+        a.translation.lerp(b.translation, t),
+        a.rotation.slerp(b.rotation, t),
+    )
+}
+
+/// Moves every surface vertex the tool contains out of it and holds it there; returns the force
+/// the held vertices push the tool with, `Σ p × f` (surface frame) and how many vertices it
+/// holds.
+///
+/// A vertex that just entered is walked back along its inverse trajectory relative to the tool
+/// (eq. 1-2 for one vertex): from where it is, back along its own motion over the substep minus
+/// the tool's, to the tool's boundary. A vertex already in contact slides: it is snapped to the
+/// nearest boundary point. The contact is frictionless: a held vertex keeps its own tangential
+/// velocity and takes the tool's normal velocity.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn hold_vertices(
+    follow: bool,
+    surface: &mut MassSpringSurface,
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    before: &Pose,
+    h: Real,
+    prev_positions: &[Vector],
+    was_held: &[bool],
+    positions: &[Vector],
+) -> (Vector, Vector, usize) {
+    let aabb: Aabb = shape.compute_aabb(pose);
+    let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
+    let margin = 1e-6 * (1.0 + aabb.extents().max_element());
+    let motion = pose.translation - before.translation;
+    // A vertex held in the last substep moved on with the tool's old normal velocity; when the
+    // tool slowed down or turned back, that leaves it outside by up to the relative motion over
+    // the substep. It is still in contact (and snapped back) unless its springs pull it away
+    // (the push-only test below).
+    let mut held = Vec::new();
+    // (vertex, its free position and velocity) for vertices that followed the tool.
+    let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
+    for (i, p) in positions.iter().enumerate() {
+        let iu = i as u32;
+        let entering = !was_held.get(i).copied().unwrap_or(false);
+        let chase = follow && !entering;
+        let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
+        let slack = if chase {
+            own.length() + 2.0 * motion.length() + margin
+        } else {
+            0.0
+        };
+        let near = p.cmpge(aabb.mins - Vector::splat(slack)).all()
+            && p.cmple(aabb.maxs + Vector::splat(slack)).all();
+        if !near || surface.is_pinned(iu) || surface.is_held(iu) {
+            continue;
+        }
+        let rel = motion - own;
+        // In contact: inside the tool, or on its boundary (where the last substep left a held
+        // vertex) within a hair, or held before and left behind by the relative motion.
+        let gap = shape.distance_to_point(pose, *p, true);
+        if gap > margin {
+            if !chase || gap > rel.length() + motion.length() + margin {
+                continue;
+            }
+            followed.push((iu, *p, surface.velocity(iu)));
+        }
+        let nearest = nearest_on_boundary(shape, pose, *p);
+        let out = if entering && rel.length() > (nearest - *p).length() + margin {
+            exit_along(shape, pose, *p, rel.normalize()).unwrap_or(nearest)
+        } else {
+            nearest
+        };
+        if !out.is_finite() {
+            continue;
+        }
+        // The tool's outward normal at the contact point.
+        let local = pose.inverse_transform_point(out);
+        let n = pose.rotation * outward_normal(shape, local, margin);
+        // Frictionless: the tool sets the normal velocity only (that of the tool's material
+        // point under the vertex, rotation included).
+        let tool_velocity = if h > 0.0 {
+            (out - before.transform_point(local)) / h
+        } else {
+            Vector::ZERO
+        };
+        let v_own = surface.velocity(iu);
+        let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
+        if surface.set_state(iu, out, v).is_ok() {
+            let _ = surface.hold_sliding(iu, n);
+            held.push((iu, n));
+        }
+    }
+    // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
+    // stick to a receding tool) is let go. The tool receives the normal part of the others'
+    // spring and damper forces (the tangential part slides them).
+    let mut force = Vector::ZERO;
+    let mut moment = Vector::ZERO;
+    let mut count = 0;
+    for &(i, n) in &held {
+        let f = surface.internal_force(i).dot(n);
+        if f >= 0.0 {
+            surface.release(i);
+            // A vertex that only followed the tool separates where its own motion took it.
+            if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
+                let _ = surface.set_state(i, p, v);
+            }
+            continue;
+        }
+        let f = n * f;
+        force += f;
+        moment += surface.position(i).cross(f);
+        count += 1;
+    }
+    (force, moment, count)
+}
+
+/// The outward normal of a convex `shape` at `local`, a point on its boundary (shape frame).
+///
+/// A convex polyhedron gives the normal of its nearest face plane. Any other shape: a short ray
+/// cast from just outside the point, back toward the shape's centre, hits the boundary next to
+/// the point and returns the exact normal there (parry's feature normals at a boundary point
+/// are unreliable for cylinders and cones, and missing for capsules and round shapes).
+/// Fallbacks: the feature normal, then the direction from the shape's centre.
+pub(super) fn outward_normal(
+    shape: &dyn parry3d::shape::Shape,
+    local: Vector,
+    margin: Real,
+) -> Vector {
+    if let Some((n, _)) = shape
+        .as_convex_polyhedron()
+        .and_then(|poly| closest_face(poly, local))
+    {
+        return n;
+    }
+    let aabb = shape.compute_local_aabb();
+    let centre = aabb.center();
+    let radial = (local - centre).try_normalize().unwrap_or(Vector::Y);
+    let eps = 1e-3 * aabb.extents().max_element() + 10.0 * margin;
+    let ray = Ray::new(local + radial * eps, -radial);
+    if let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, 2.0 * eps, true) {
+        let n = hit.normal;
+        if hit.time_of_impact > 0.0 && n.is_finite() && n.dot(radial) > 0.0 {
+            if let Some(n) = n.try_normalize() {
+                return n;
+            }
+        }
+    }
+    let (proj, feature) = shape.project_local_point_and_get_feature(local);
+    shape
+        .feature_normal_at_point(0, feature, proj.point)
+        .filter(|n| n.is_finite() && n.dot(radial) > 0.0)
+        .unwrap_or(radial)
+}
+
+/// The face of `poly` whose plane is nearest above or least below `local`: its outward normal
+/// and the signed distance of `local` to its plane. For a point inside the polyhedron that
+/// face holds the nearest boundary point.
+pub(super) fn closest_face(
+    poly: &parry3d::shape::ConvexPolyhedron,
+    local: Vector,
+) -> Option<(Vector, Real)> {
+    face_planes(poly)
+        .map(|(n, v)| (n, n.dot(local - v)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// Each face of `poly` as its outward normal and one of its vertices (shape frame).
+pub(super) fn face_planes(
+    poly: &parry3d::shape::ConvexPolyhedron,
+) -> impl Iterator<Item = (Vector, Vector)> + '_ {
+    let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
+    poly.faces().iter().filter_map(move |f| {
+        let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
+        Some((f.normal, *v))
+    })
+}
+
+/// The nearest point of the tool's boundary to `p` (world). parry's projection of a point
+/// inside a convex polyhedron is approximate, so there the nearest face plane is used.
+pub(super) fn nearest_on_boundary(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+) -> Vector {
+    if let Some(poly) = shape.as_convex_polyhedron() {
+        let local = pose.inverse_transform_point(p);
+        if let Some((n, d)) = closest_face(poly, local) {
+            if d <= 0.0 {
+                return pose.transform_point(local - n * d);
+            }
+        }
+    }
+    shape.project_point(pose, p, false).point
+}
+
+/// Where the ray from `p` (inside the tool, world) along the unit `d` leaves the tool. For a
+/// convex polyhedron the nearest exit plane is used (parry's ray cast from inside a support
+/// map is iterative and can stop early).
+pub(super) fn exit_along(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+    d: Vector,
+) -> Option<Vector> {
+    if let Some(poly) = shape.as_convex_polyhedron() {
+        let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
+        let t = face_planes(poly)
+            .filter_map(|(n, v)| {
+                let along = n.dot(dl);
+                (along > 0.0).then(|| (-n.dot(local - v) / along).max(0.0))
+            })
+            .min_by(|a, b| a.total_cmp(b))?;
+        return Some(p + d * t);
+    }
+    shape
+        .cast_ray(pose, &Ray::new(p, d), Real::MAX, false)
+        .map(|t| p + d * t)
+}
