@@ -59,6 +59,7 @@ pub mod hooks;
 pub mod math;
 #[cfg(feature = "render")]
 pub mod render;
+#[cfg(feature = "fixtures")]
 pub mod scenes;
 pub mod surface;
 

@@ -1,5 +1,9 @@
 //! Reference scenes shared by the examples, tests and benchmarks (fixed, deterministic).
 //!
+//! Test fixtures, not API: compiled only with the `fixtures` feature, which this crate's own
+//! examples, tests and benches turn on through a dev-dependency on the crate itself. Their
+//! helpers may panic on impossible input (they build fixed scenes).
+//!
 //! - Rigid contact: [`fig4_scenes`], [`table1_scenes`], [`drop_world`] (with [`run_drop`]) and
 //!   [`boxes_on_trimesh_floor`].
 //! - Soft surfaces: [`Fig7Organ`] (the paper's Fig. 7 under six forces), [`MultiToolScene`]
