@@ -16,10 +16,13 @@
 //! - Sleeping bodies are not guarded (they do not move); a collider whose shape has no
 //!   triangle-mesh form (half-spaces, segments, polylines, custom shapes) is left to rapier
 //!   ([`TouchPipeline::refused_colliders`]).
-//! - Curved shapes (balls, capsules, cylinders, cones, rounded shapes) are guarded through a
-//!   tessellation; the hooks never rewrite their contacts (rapier's are exact). The guard's
-//!   reconstructions of tumbling curved bodies are costly (see the README's stress-scene
-//!   table).
+//! - Curved shapes (balls, capsules, cylinders, cones, rounded shapes) are guarded on the
+//!   shapes themselves ([`crate::geometry::Reconstructor::reconstruct_shapes`]: conservative
+//!   advancement on parry's GJK), not on their tessellated touch meshes; the hooks never
+//!   rewrite their contacts (rapier's are exact).
+//! - Two dynamic bodies that cannot have passed through each other over a step (relative
+//!   travel under their safe step length) keep rapier's soft contact, in the guard and in the
+//!   hooks alike.
 
 mod pair_filter;
 mod report;
