@@ -5,7 +5,8 @@
 //!   polylines) meshed by constrained Delaunay refinement ([`spade`]) to a target edge length.
 //!   The 2D point `(u, v)` becomes the 3D point `(u, 0, v)`: a horizontal plate, `y` up.
 //! - [`plate`], [`box_surface`], [`sphere_surface`]: regular meshes, no error cases.
-//! - [`load_obj`] / [`parse_obj`]: a triangle mesh from an OBJ file or string.
+//! - [`load_obj`] / [`parse_obj`]: a triangle mesh from an OBJ file or string; [`load_glb`] /
+//!   [`parse_glb`]: from a binary glTF asset (the meshes its scene places).
 //! - [`paper_plate_outline`], [`paper_organ_outline`]: outlines the size of the paper's Fig. 6
 //!   plate (about 517 nodes) and Fig. 7 organ with a constrained internal boundary (about 790
 //!   nodes).
@@ -23,6 +24,8 @@ use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
+
+pub use super::gltf_mesh::{load_glb, parse_glb};
 
 /// A triangle mesh: vertex positions and counter-clockwise index triples.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -165,11 +168,37 @@ pub enum MeshingError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// The `.glb` could not be parsed or failed glTF's validation (gltf's reason says why).
+    #[error("invalid glTF: {0}")]
+    Gltf(#[source] gltf::Error),
+    /// A glTF mesh reads a buffer that is not the `.glb` file's own binary chunk (an external
+    /// file or a data URI): pack the asset as a single `.glb`.
+    #[error("glTF buffer {buffer} is not the .glb's binary chunk (external or data URI)")]
+    GltfExternalBuffer {
+        /// The buffer's index.
+        buffer: usize,
+    },
+    /// A glTF primitive's index points past its vertices.
+    #[error("glTF mesh {mesh}, primitive {primitive} has an index past its vertices")]
+    GltfIndexOutOfRange {
+        /// The mesh's index.
+        mesh: usize,
+        /// The primitive's index in the mesh.
+        primitive: usize,
+    },
+    /// A triangle primitive of a glTF mesh has no positions.
+    #[error("glTF mesh {mesh}, primitive {primitive} has no POSITION attribute")]
+    GltfNoPositions {
+        /// The mesh's index.
+        mesh: usize,
+        /// The primitive's index in the mesh.
+        primitive: usize,
+    },
     /// The OBJ text could not be parsed. Fix the OBJ text (tobj's reason says which element).
     #[error("invalid OBJ: {0}")]
     Obj(#[source] tobj::LoadError),
-    /// An OBJ vertex position is NaN or infinite. Fix the `v` line.
-    #[error("OBJ vertex {vertex} (in file order, over all objects) is not finite")]
+    /// A vertex position is NaN or infinite (OBJ: fix the `v` line; glTF: the POSITION data).
+    #[error("vertex {vertex} (in file order, over all objects) is not finite")]
     NonFinitePosition {
         /// The vertex's index in the merged mesh, before compaction.
         vertex: usize,
@@ -809,6 +838,15 @@ fn read_obj(reader: &mut impl BufRead) -> Result<SurfaceMesh, MeshingError> {
             triangles.push(t.map(|i| i + offset));
         }
     }
+    compacted(positions, triangles)
+}
+
+/// A surface from a triangle soup read from a file: degenerate triangles already dropped, the
+/// vertices no triangle uses removed (the others keep their file order).
+pub(super) fn compacted(
+    positions: Vec<Vector>,
+    triangles: Vec<[usize; 3]>,
+) -> Result<SurfaceMesh, MeshingError> {
     if triangles.is_empty() {
         return Err(MeshingError::EmptyMesh);
     }

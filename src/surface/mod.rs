@@ -7,6 +7,7 @@
 //! - [`filter`]: the global filter `W`, exact (sparse Cholesky) or immediate-neighbour.
 
 pub mod filter;
+mod gltf_mesh;
 mod mass_spring_surface;
 pub mod meshing;
 

@@ -6,6 +6,7 @@ mod coupling;
 mod curved_reconstruction;
 mod every_scale;
 mod fig4;
+mod gltf_input;
 mod mesh_inputs;
 mod pipeline;
 mod prelude;
