@@ -148,6 +148,28 @@ pub struct ContactConfiguration {
 }
 
 impl ContactConfiguration {
+    /// A configuration with nothing found yet: separated, nothing to undo, the moving object
+    /// at `pose`.
+    pub(crate) fn separated(
+        direction: Vector,
+        direction_source: DirectionSource,
+        on_trajectory: bool,
+        pose: Pose,
+    ) -> Self {
+        Self {
+            state: TouchState::Separated,
+            reversing_vector: Vector::ZERO,
+            depth: 0.0,
+            direction,
+            direction_source,
+            on_trajectory,
+            time_of_impact: None,
+            touch_pose: pose,
+            patches: Vec::new(),
+            candidate_pairs: 0,
+        }
+    }
+
     /// `true` if the state is [`TouchState::Penetrating`] or [`TouchState::Perforated`]: the
     /// current pose must be corrected.
     pub fn needs_correction(&self) -> bool {

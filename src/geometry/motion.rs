@@ -166,18 +166,12 @@ impl Reconstructor {
                 (cf - c_end).try_normalize()
             })
             .unwrap_or(DVec3::NEG_Y);
-        let separated = ContactConfiguration {
-            state: TouchState::Separated,
-            reversing_vector: Vector::ZERO,
-            depth: 0.0,
-            direction: u_world.as_vec3(),
-            direction_source: DirectionSource::Trajectory,
-            on_trajectory: true,
-            time_of_impact: None,
-            touch_pose: now,
-            patches: Vec::new(),
-            candidate_pairs: 0,
-        };
+        let separated = ContactConfiguration::separated(
+            u_world.as_vec3(),
+            DirectionSource::Trajectory,
+            true,
+            now,
+        );
 
         // Quick reject: the swept bounding sphere misses the fixed object's box.
         let inv_f = qf.conjugate();

@@ -450,18 +450,8 @@ impl Reconstructor {
         };
 
         let fr = self.frame_at(fixed, pos_fixed, moving, pos_moving, u_world, tol);
-        let mut result = ContactConfiguration {
-            state: TouchState::Separated,
-            reversing_vector: Vector::ZERO,
-            depth: 0.0,
-            direction: u_world.as_vec3(),
-            direction_source: source,
-            on_trajectory: true,
-            time_of_impact: None,
-            touch_pose: *pos_moving,
-            patches: Vec::new(),
-            candidate_pairs: 0,
-        };
+        let mut result =
+            ContactConfiguration::separated(u_world.as_vec3(), source, true, *pos_moving);
 
         // The range of `s` over which the bounding boxes overlap.
         let Some((s_lo_box, s_hi)) = aabb_overlap_range(fixed, moving, &fr) else {

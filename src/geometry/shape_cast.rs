@@ -98,25 +98,13 @@ impl Reconstructor {
             Some(u) if d.length() > 1e-3 * tol => (u, DirectionSource::Trajectory),
             _ => (Vector::ZERO, DirectionSource::ZeroMotionFallback),
         };
-        let mut result = ContactConfiguration {
-            state: TouchState::Separated,
-            reversing_vector: Vector::ZERO,
-            depth: 0.0,
-            direction,
-            direction_source,
-            on_trajectory: false,
-            time_of_impact: None,
-            touch_pose: end,
-            patches: Vec::new(),
-            candidate_pairs: 0,
-        };
-        let contact_at = |pose: &Pose| q.contact(pose);
+        let mut result = ContactConfiguration::separated(direction, direction_source, false, end);
         let first = q.advance(|t| motion.pose_at(t), speed, 1.0);
         match first {
             Advance::Unsupported => Ok(None),
             Advance::Apart => {
                 // Separated all along (closer than the touch tolerance at the end: touching).
-                if let Some(c) = contact_at(&end) {
+                if let Some(c) = q.contact(&end) {
                     result.state = TouchState::Touching;
                     result.patches.push(vertex_patch(c.point1, c.normal1));
                 }
@@ -125,7 +113,7 @@ impl Reconstructor {
             Advance::InContact => {
                 // In contact when the step began: no first touch on this path, the way out is
                 // along the contact normal at the pose now.
-                let Some(c) = contact_at(&end) else {
+                let Some(c) = q.contact(&end) else {
                     return Ok(Some(result));
                 };
                 result.patches.push(vertex_patch(c.point1, c.normal1));
@@ -142,14 +130,14 @@ impl Reconstructor {
             }
             Advance::Touch(t) => {
                 let touch = motion.pose_at(t);
-                let Some(c) = contact_at(&touch) else {
+                let Some(c) = q.contact(&touch) else {
                     return Ok(None);
                 };
                 result.patches.push(vertex_patch(c.point1, c.normal1));
                 let witness = touch.inverse_transform_point(c.point2);
                 let travelled =
                     (end.transform_point(witness) - touch.transform_point(witness)).length();
-                let penetrating = contact_at(&end).is_some_and(|c| c.dist < -tol);
+                let penetrating = q.contact(&end).is_some_and(|c| c.dist < -tol);
                 result.state = if penetrating {
                     TouchState::Penetrating
                 } else {
@@ -435,18 +423,12 @@ impl Reconstructor {
             self.options.tolerance,
             [pos_moving.translation; 2],
         );
-        let mut result = ContactConfiguration {
-            state: TouchState::Separated,
-            reversing_vector: Vector::ZERO,
-            depth: 0.0,
-            direction: -out,
-            direction_source: DirectionSource::ZeroMotionFallback,
-            on_trajectory: false,
-            time_of_impact: None,
-            touch_pose: *pos_moving,
-            patches: Vec::new(),
-            candidate_pairs: 0,
-        };
+        let mut result = ContactConfiguration::separated(
+            -out,
+            DirectionSource::ZeroMotionFallback,
+            false,
+            *pos_moving,
+        );
         // Come back toward the pose now from a moving diameter out (an overlap is rarely
         // deeper), then from past both shapes, until first touch.
         for reach in [4.0 * rm, 2.0 * (rf + rm)] {

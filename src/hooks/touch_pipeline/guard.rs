@@ -699,8 +699,9 @@ impl PairView {
 }
 
 /// The way out of an overlap along `out` (a world direction out of the partner) for the mover
-/// at its pose now: on the shapes themselves when the pair is `curved` (parry's shape cast),
-/// by the exact method on the touch meshes otherwise (and when parry has no cast).
+/// at its pose now: on the shapes themselves when the pair is `curved`
+/// ([`Reconstructor::push_out_shapes`]), by the exact method on the touch meshes otherwise
+/// (and when parry has no distance query for the shapes).
 fn push_out(
     options: ReconstructionOptions,
     curved: bool,
