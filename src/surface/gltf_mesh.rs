@@ -69,9 +69,13 @@ pub fn parse_glb(bytes: &[u8]) -> Result<SurfaceMesh, MeshingError> {
             ) {
                 continue;
             }
+            // Positions and indices both (an index buffer left unread would turn an indexed
+            // primitive into an unindexed one).
             for buffer in primitive
                 .attributes()
-                .filter_map(|(_, a)| a.view())
+                .map(|(_, a)| a)
+                .chain(primitive.indices())
+                .filter_map(|a| a.view())
                 .map(|v| v.buffer())
             {
                 if !matches!(buffer.source(), Source::Bin) {

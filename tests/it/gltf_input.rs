@@ -9,6 +9,19 @@ use rapier_touch::surface::meshing::{box_surface, parse_glb, MeshingError, Surfa
 /// A `.glb` holding `mesh` as one primitive (`mode`, indices written as given), placed by
 /// `child` under `parent` (TRS each).
 fn glb(mesh: &SurfaceMesh, indices: &[u32], mode: u32, parent: &str, child: &str) -> Vec<u8> {
+    glb_with(mesh, indices, mode, parent, child, false)
+}
+
+/// [`glb`], with the indices' buffer view pointing into an external file when
+/// `external_indices`.
+fn glb_with(
+    mesh: &SurfaceMesh,
+    indices: &[u32],
+    mode: u32,
+    parent: &str,
+    child: &str,
+    external_indices: bool,
+) -> Vec<u8> {
     let mut bin: Vec<u8> = Vec::new();
     for v in &mesh.vertices {
         for c in [v.x, v.y, v.z] {
@@ -34,8 +47,8 @@ fn glb(mesh: &SurfaceMesh, indices: &[u32], mode: u32, parent: &str, child: &str
           {{"bufferView":0,"componentType":5126,"count":{nv},"type":"VEC3","min":[{},{},{}],"max":[{},{},{}]}},
           {{"bufferView":1,"componentType":5125,"count":{ni},"type":"SCALAR"}}],
         "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{positions_len}}},
-          {{"buffer":0,"byteOffset":{positions_len},"byteLength":{il}}}],
-        "buffers":[{{"byteLength":{bl}}}]}}"#,
+          {{"buffer":{ib},"byteOffset":{io},"byteLength":{il}}}],
+        "buffers":[{{"byteLength":{bl}}}{extra}]}}"#,
         lo.x,
         lo.y,
         lo.z,
@@ -46,6 +59,16 @@ fn glb(mesh: &SurfaceMesh, indices: &[u32], mode: u32, parent: &str, child: &str
         ni = indices.len(),
         il = indices.len() * 4,
         bl = bin.len(),
+        ib = if external_indices { 1 } else { 0 },
+        io = if external_indices { 0 } else { positions_len },
+        extra = if external_indices {
+            format!(
+                r#",{{"byteLength":{},"uri":"indices.bin"}}"#,
+                indices.len() * 4
+            )
+        } else {
+            String::new()
+        },
     );
     let mut json = json.into_bytes();
     while !json.len().is_multiple_of(4) {
@@ -165,6 +188,11 @@ fn bad_glbs_are_errors() {
     assert!(matches!(
         parse_glb(&glb(&mesh, &bad, 4, PARENT, CHILD)),
         Err(MeshingError::GltfIndexOutOfRange { .. })
+    ));
+    // Indices in an external file: refused, not read as an unindexed primitive.
+    assert!(matches!(
+        parse_glb(&glb_with(&mesh, &indices, 4, PARENT, CHILD, true)),
+        Err(MeshingError::GltfExternalBuffer { buffer: 1 })
     ));
     // Points only: no triangle.
     assert!(matches!(
