@@ -43,9 +43,9 @@ impl Reconstructor {
     /// - a perforation is told from a graze by advancing back from the current pose: a last
     ///   touch later than the first one.
     ///
-    /// `Ok(None)` when parry has no distance query for the pair (custom shapes) or the
-    /// advance does not converge in 128 queries (a body grazing along the other at a speed far
-    /// below its rotation's): use the mesh method then.
+    /// `Ok(None)` when parry has no distance query for the pair (custom shapes), a shape has no
+    /// size (a ball of radius 0), or the advance does not converge in 128 queries (a body
+    /// grazing along the other at a speed far below its rotation's): use the mesh method then.
     ///
     /// # Errors
     /// [`ReconstructionError::NonFinitePose`] if a pose or the centre is NaN or infinite.
@@ -209,6 +209,8 @@ struct PairQuery<'a> {
     pos_fixed: Pose,
     moving: &'a dyn Shape,
     convex: Option<(Scaled<'a>, Scaled<'a>)>,
+    /// Both shapes have a size (no query otherwise).
+    sized: bool,
     unit: Real,
     /// The tolerance: the relative tolerance times the smaller diameter, and never below the
     /// `f32` resolution of the coordinates involved.
@@ -229,6 +231,9 @@ impl<'a> PairQuery<'a> {
             2.0 * fixed.compute_local_bounding_sphere().radius,
             2.0 * moving.compute_local_bounding_sphere().radius,
         );
+        // A shape of no size (a ball of radius 0) is no surface to touch: parry's EPA indexes
+        // out of bounds on it. Such a pair gets no query (the mesh method decides).
+        let sized = df > 0.0 && dm > 0.0 && df.is_finite() && dm.is_finite();
         let unit = df.min(dm).max(Real::MIN_POSITIVE);
         let magnitude = places
             .iter()
@@ -246,6 +251,7 @@ impl<'a> PairQuery<'a> {
             pos_fixed: *pos_fixed,
             moving,
             convex,
+            sized,
             unit,
             tol,
             touch: TOUCH * tol,
@@ -262,6 +268,9 @@ impl<'a> PairQuery<'a> {
     /// The distance with `moving` at `pose` (0 when overlapping), `None` when parry has no
     /// query for the pair.
     fn distance(&self, pose: &Pose) -> Option<Real> {
+        if !self.sized {
+            return None;
+        }
         let d = match &self.convex {
             Some((f, m)) => {
                 query::details::distance_support_map_support_map(&self.scaled_pose(pose), f, m)
@@ -279,6 +288,9 @@ impl<'a> PairQuery<'a> {
     /// The contact with `moving` at `pose` (in world space), if closer than twice the touch
     /// tolerance.
     fn contact(&self, pose: &Pose) -> Option<query::Contact> {
+        if !self.sized {
+            return None;
+        }
         let prediction = 2.0 * self.touch;
         let c = match &self.convex {
             Some((f, m)) => {
@@ -370,14 +382,15 @@ fn vertex_patch(point: Vector, normal: Vector) -> ContactPatch {
 impl Reconstructor {
     /// The way out of an overlap along a given direction, on the shapes themselves: `moving`
     /// at `pos_moving` is translated along `out` (a world direction, out of `fixed`) to where
-    /// it only touches `fixed`, by parry's linear shape cast from a pose outside back toward
-    /// the pose now. The curved-shape counterpart of [`Reconstructor::reconstruct`] with
+    /// it only touches `fixed`, advancing (as [`Reconstructor::reconstruct_shapes`] does) from
+    /// a pose outside back toward the pose now. The curved-shape counterpart of [`Reconstructor::reconstruct`] with
     /// [`ReconstructionOptions::zero_motion_direction`](super::ReconstructionOptions) set to
     /// `-out` and no motion: `on_trajectory` is false and the single patch is a
     /// [`ContactKind::Vertex`] without features.
     ///
-    /// `Ok(None)` when parry has no shape cast for the pair or the shapes still overlap
-    /// after a translation by both bounding diameters (use the mesh method then).
+    /// `Ok(None)` when parry has no distance query for the pair, a shape has no size, or the
+    /// shapes still overlap after a translation by both bounding diameters (use the mesh
+    /// method then).
     ///
     /// # Errors
     /// [`ReconstructionError::NonFinitePose`] for a NaN or infinite pose,

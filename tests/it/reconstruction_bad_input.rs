@@ -307,3 +307,67 @@ fn bad_rotating_motions_are_errors_or_finite() {
     let r = rec.reconstruct_motion(&floor, &id, &c, &far).unwrap();
     assert!(r.touch_pose.is_finite() && r.reversing_vector.is_finite());
 }
+
+/// The curved-shape methods (`reconstruct_shapes`, `push_out_shapes`): NaN and infinite poses,
+/// a zero or NaN push direction are errors; a zero-size ball, a degenerate motion (no travel)
+/// and a shape parry has no distance query for give a finite answer or `None` (the mesh
+/// method's turn), never a panic or a NaN pose.
+#[test]
+fn curved_shape_methods_reject_bad_input() {
+    use parry3d::shape::{Ball, HalfSpace};
+    let slab = Cuboid::new(Vector::new(1.0, 0.5, 1.0));
+    let ball = Ball::new(0.25);
+    let at = |y: f32| Pose::from_translation(Vector::new(0.0, y, 0.0));
+    let mut rec = Reconstructor::default();
+    let nan = Pose::from_translation(Vector::new(f32::NAN, 0.0, 0.0));
+    let inf = Pose::from_translation(Vector::new(0.0, f32::INFINITY, 0.0));
+    for (fixed_pose, motion) in [
+        (nan, RigidMotion::new(at(1.0), at(0.6), Vector::ZERO)),
+        (at(-0.5), RigidMotion::new(inf, at(0.6), Vector::ZERO)),
+        (
+            at(-0.5),
+            RigidMotion::new(at(1.0), at(0.6), Vector::splat(f32::NAN)),
+        ),
+    ] {
+        assert_eq!(
+            rec.reconstruct_shapes(&slab, &fixed_pose, &ball, &motion),
+            Err(ReconstructionError::NonFinitePose)
+        );
+    }
+    assert_eq!(
+        rec.push_out_shapes(&slab, &nan, &ball, &at(0.1), Vector::Y),
+        Err(ReconstructionError::NonFinitePose)
+    );
+    for out in [Vector::ZERO, Vector::new(f32::NAN, 1.0, 0.0)] {
+        assert_eq!(
+            rec.push_out_shapes(&slab, &at(-0.5), &ball, &at(0.1), out),
+            Err(ReconstructionError::InvalidFallbackDirection)
+        );
+    }
+    let finite = |c: &ContactConfiguration| {
+        c.touch_pose.is_finite() && c.reversing_vector.is_finite() && c.depth.is_finite()
+    };
+    // A zero-size ball, a motion that does not move, a half-space (no finite surface).
+    let point = Ball::new(0.0);
+    let still = RigidMotion::new(at(0.1), at(0.1), Vector::ZERO);
+    let fall = RigidMotion::new(at(1.0), at(-0.2), Vector::ZERO);
+    let half = HalfSpace::new(Vector::Y);
+    for c in [
+        rec.reconstruct_shapes(&slab, &at(-0.5), &point, &fall),
+        rec.reconstruct_shapes(&slab, &at(-0.5), &ball, &still),
+        rec.reconstruct_shapes(&half, &at(-0.5), &ball, &fall),
+        rec.push_out_shapes(&slab, &at(-0.5), &point, &at(-0.1), Vector::Y),
+    ] {
+        if let Some(c) = c.unwrap() {
+            assert!(finite(&c), "{c:?}");
+        }
+    }
+    // Still and overlapping by 0.15: not on a path, pushed out along the contact normal.
+    let c = rec
+        .reconstruct_shapes(&slab, &at(-0.5), &ball, &still)
+        .unwrap()
+        .unwrap();
+    assert!(!c.on_trajectory);
+    assert_eq!(c.state, TouchState::Penetrating);
+    assert!((c.reversing_vector - Vector::new(0.0, 0.15, 0.0)).length() < 1e-4);
+}
