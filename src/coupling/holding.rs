@@ -3,13 +3,16 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
+use super::pressing::{find_contacts, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
+use crate::geometry::TouchMesh;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::query::Ray;
 use rapier3d::geometry::ColliderHandle;
 use rapier3d::pipeline::PhysicsWorld;
+use std::sync::Arc;
 
 /// The attached surfaces whose body is still in the world, with that body's pose.
 pub(super) fn attached_with_pose<'a>(
@@ -30,18 +33,34 @@ pub(super) fn attached_with_pose<'a>(
         })
 }
 
-/// One surface substep: the surface steps, then each tool (poses in world, at the start and the
-/// end of the substep) holds the vertices it contains. Returns each tool's reaction (world).
+/// A tool over one substep: its collider, its poses (world) at the start and the end, and its
+/// touch mesh when its shape is polyhedral (its vertices and edges then press the surface
+/// between the surface's vertices, [`super::pressing`]).
+#[derive(Clone, Debug)]
+pub(super) struct ToolMotion {
+    pub handle: ColliderHandle,
+    pub start: Pose,
+    pub end: Pose,
+    pub mesh: Option<Arc<TouchMesh>>,
+}
+
+/// One surface substep: the surface steps, then each tool holds the vertices it contains, then
+/// each polyhedral tool presses its vertices and edges into the surface between the surface's
+/// vertices. Returns each tool's reaction (world): the holds' spring forces at the end of the
+/// substep plus the impulses the pressed points gave during it.
 pub(super) fn surface_substep(
     s: &mut AttachedSurface,
     world: &PhysicsWorld,
     body_pose: &Pose,
-    tools: &[(ColliderHandle, Pose, Pose)],
+    tools: &[ToolMotion],
     h: Real,
 ) -> Vec<(ColliderHandle, ToolReaction)> {
     let inv = body_pose.inverse();
     s.surface.positions_into(&mut s.before);
     s.surface.step();
+    record_impulses(&s.surface, &mut s.pressed);
+    std::mem::swap(&mut s.pressed, &mut s.last_pressed);
+    s.pressed.clear();
     s.was_held.clear();
     s.was_held
         .extend((0..s.surface.num_vertices() as u32).map(|i| s.surface.is_held(i)));
@@ -50,8 +69,8 @@ pub(super) fn surface_substep(
     // positions serves every tool.
     s.surface.positions_into(&mut s.scratch);
     let mut out = Vec::with_capacity(tools.len());
-    for (th, start, end) in tools {
-        let Some(tool) = world.colliders.get(*th) else {
+    for t in tools {
+        let Some(tool) = world.colliders.get(t.handle) else {
             continue;
         };
         // Vertices follow a tool whose motion is prescribed (kinematic or no body); a dynamic
@@ -64,31 +83,68 @@ pub(super) fn surface_substep(
             follow,
             &mut s.surface,
             tool.shape(),
-            &(inv * *end),
-            &(inv * *start),
+            &(inv * t.end),
+            &(inv * t.start),
             h,
             &s.before,
             &s.was_held,
             &s.scratch,
         );
+        let (pf, pm, pn) = reaction_of(&s.last_pressed, t.handle, h);
+        let (force, arm_sum) = (force + pf, arm_sum + pm);
         let world_force = body_pose.rotation * force;
         let centre = tool
             .parent()
             .and_then(|b| world.bodies.get(b))
             .map(|b| b.center_of_mass())
-            .unwrap_or(end.translation);
+            .unwrap_or(t.end.translation);
         // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
         let torque =
             body_pose.rotation * arm_sum - (centre - body_pose.translation).cross(world_force);
         out.push((
-            *th,
+            t.handle,
             ToolReaction {
                 force: world_force,
                 torque,
                 mean_force: world_force,
                 held_vertices: held,
+                pressed_points: pn,
             },
         ));
+    }
+    // Sharp features, against the surface as the vertex holds left it, pressed together.
+    if tools.iter().any(|t| t.mesh.is_some()) {
+        s.surface.positions_into(&mut s.scratch);
+        s.contacts.clear();
+        let (mut velocities, mut owners) = (Vec::new(), Vec::new());
+        for t in tools {
+            let Some(mesh) = &t.mesh else {
+                continue;
+            };
+            find_contacts(
+                s.surface.triangles(),
+                mesh,
+                &(inv * t.start),
+                &(inv * t.end),
+                h,
+                &s.before,
+                &s.scratch,
+                t.handle,
+                &s.last_pressed,
+                &mut s.candidates,
+                &mut s.contacts,
+                &mut velocities,
+            );
+            owners.resize(s.contacts.len(), t.handle);
+        }
+        press_all(
+            &mut s.surface,
+            &s.contacts,
+            &velocities,
+            &owners,
+            h,
+            &mut s.pressed,
+        );
     }
     out
 }

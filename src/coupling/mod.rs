@@ -4,6 +4,7 @@
 
 mod events;
 mod holding;
+mod pressing;
 mod surface_set;
 
 pub use events::ToolTouchEvent;

@@ -1,7 +1,9 @@
 //! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
 
 use super::events::{ToolTouchEvent, TouchTracker};
-use super::holding::{attached_with_pose, lerp_pose, surface_substep};
+use super::holding::{attached_with_pose, lerp_pose, surface_substep, ToolMotion};
+use super::pressing::Pressed;
+use crate::geometry::{SurfaceContact, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
 use parry3d::shape::{SharedShape, TriMeshFlags};
@@ -9,6 +11,7 @@ use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderBuilder, ColliderHandle, Group, InteractionGroups};
 use rapier3d::pipeline::PhysicsWorld;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// The solver group this crate reserves for surface colliders: tools registered with
 /// [`SurfaceSet::add_tool`] drop it from their solver-group filter, so rapier does not also
@@ -100,6 +103,9 @@ pub struct ToolReaction {
     pub mean_force: Vector,
     /// Number of surface vertices the tool holds.
     pub held_vertices: usize,
+    /// Number of surface points a polyhedral tool's vertices and edges pressed between the
+    /// surface's vertices (inside triangles, on edges) during the last substep.
+    pub pressed_points: usize,
 }
 
 /// A surface attached to a rigid body.
@@ -112,6 +118,11 @@ pub struct AttachedSurface {
     pub(super) scratch: Vec<Vector>,
     pub(super) before: Vec<Vector>,
     pub(super) was_held: Vec<bool>,
+    /// Points the tools pressed in the current and the last substep.
+    pub(super) pressed: Vec<Pressed>,
+    pub(super) last_pressed: Vec<Pressed>,
+    pub(super) candidates: Vec<u32>,
+    pub(super) contacts: Vec<SurfaceContact>,
 }
 
 impl std::fmt::Debug for AttachedSurface {
@@ -157,6 +168,8 @@ struct ToolState {
     /// Whether the tool's solver-group filter held [`SURFACE_SOLVER_GROUP`] before
     /// [`SurfaceSet::add_tool`] dropped it (restored by [`SurfaceSet::remove_tool`]).
     had_surface_group: bool,
+    /// The tool's touch mesh when its shape is polyhedral.
+    mesh: Option<Arc<TouchMesh>>,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -323,6 +336,10 @@ impl SurfaceSet {
             substeps: options.substeps,
             before: verts.clone(),
             was_held: Vec::new(),
+            pressed: Vec::new(),
+            last_pressed: Vec::new(),
+            candidates: Vec::new(),
+            contacts: Vec::new(),
             scratch: verts,
         };
         if let Some(i) = self.entries.iter().position(|e| e.1.is_none()) {
@@ -386,7 +403,9 @@ impl SurfaceSet {
             return;
         }
         let mut had_surface_group = false;
+        let mut mesh = None;
         if let Some(c) = world.colliders.get_mut(tool) {
+            mesh = polyhedral_mesh(c.shape());
             let g = c.solver_groups();
             had_surface_group = g.filter.contains(SURFACE_SOLVER_GROUP);
             c.set_solver_groups(InteractionGroups::new(
@@ -403,6 +422,7 @@ impl SurfaceSet {
                 applied: (Vector::ZERO, Vector::ZERO),
                 haptic_prev: None,
                 had_surface_group,
+                mesh,
             },
         );
     }
@@ -504,15 +524,26 @@ impl SurfaceSet {
         let state = self.tools.get_mut(&tool)?;
         let start = state.haptic_prev.unwrap_or(device);
         state.haptic_prev = Some(device);
-        let others: Vec<(ColliderHandle, Pose, Pose)> = self
+        let mesh = state.mesh.clone();
+        let others: Vec<ToolMotion> = self
             .tools
-            .keys()
-            .filter(|h| **h != tool)
-            .filter_map(|h| {
+            .iter()
+            .filter(|(h, _)| **h != tool)
+            .filter_map(|(h, t)| {
                 let p = *world.colliders.get(*h)?.position();
-                Some((*h, p, p))
+                Some(ToolMotion {
+                    handle: *h,
+                    start: p,
+                    end: p,
+                    mesh: t.mesh.clone(),
+                })
             })
-            .chain(std::iter::once((tool, start, device)))
+            .chain(std::iter::once(ToolMotion {
+                handle: tool,
+                start,
+                end: device,
+                mesh,
+            }))
             .collect();
         let mut total = ToolReaction::default();
         for (_, s, body_pose) in attached_with_pose(&mut self.entries, world) {
@@ -523,6 +554,7 @@ impl SurfaceSet {
                     total.torque += r.torque;
                     total.mean_force += r.force;
                     total.held_vertices += r.held_vertices;
+                    total.pressed_points += r.pressed_points;
                 }
             }
         }
@@ -561,13 +593,18 @@ impl SurfaceSet {
         for t in self.tools.values_mut() {
             t.reaction = ToolReaction::default();
         }
-        let tool_list: Vec<(ColliderHandle, Pose, Pose)> = self
+        let tool_list: Vec<ToolMotion> = self
             .tools
             .iter()
             .filter_map(|(h, t)| {
                 let c = world.colliders.get(*h)?;
                 let now = *c.position();
-                Some((*h, t.prev.unwrap_or(now), now))
+                Some(ToolMotion {
+                    handle: *h,
+                    start: t.prev.unwrap_or(now),
+                    end: now,
+                    mesh: t.mesh.clone(),
+                })
             })
             .collect();
         let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
@@ -578,22 +615,28 @@ impl SurfaceSet {
             for k in 1..=n {
                 let a = k as Real / n as Real;
                 let a_prev = (k - 1) as Real / n as Real;
-                let poses: Vec<(ColliderHandle, Pose, Pose)> = tool_list
+                let poses: Vec<ToolMotion> = tool_list
                     .iter()
-                    .map(|(th, p0, p1)| (*th, lerp_pose(p0, p1, a_prev), lerp_pose(p0, p1, a)))
+                    .map(|t| ToolMotion {
+                        handle: t.handle,
+                        start: lerp_pose(&t.start, &t.end, a_prev),
+                        end: lerp_pose(&t.start, &t.end, a),
+                        mesh: t.mesh.clone(),
+                    })
                     .collect();
                 for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {
                     let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
                     m.0 += r.force / n as Real;
                     m.1 += r.torque / n as Real;
                     if k == n {
-                        if r.held_vertices > 0 {
+                        if r.held_vertices > 0 || r.pressed_points > 0 {
                             touching.insert((th, handle));
                         }
                         if let Some(t) = self.tools.get_mut(&th) {
                             t.reaction.force += r.force;
                             t.reaction.torque += r.torque;
                             t.reaction.held_vertices += r.held_vertices;
+                            t.reaction.pressed_points += r.pressed_points;
                         }
                     }
                 }
@@ -640,4 +683,17 @@ impl SurfaceSet {
             }
         }
     }
+}
+
+/// The touch mesh of a polyhedral tool shape (cuboid, convex polyhedron, triangle mesh), whose
+/// vertices and edges can press a surface between its vertices. Curved and rounded shapes have
+/// no sharp features: the surface vertices they contain carry their contact.
+fn polyhedral_mesh(shape: &dyn parry3d::shape::Shape) -> Option<Arc<TouchMesh>> {
+    let polyhedral = shape.as_cuboid().is_some()
+        || shape.as_convex_polyhedron().is_some()
+        || shape.as_trimesh().is_some();
+    if !polyhedral {
+        return None;
+    }
+    TouchMesh::from_shape(shape).ok().map(Arc::new)
 }

@@ -5,6 +5,8 @@
 //!   shape with a surface: [`TouchMesh::from_shape`]).
 //! - [`Reconstructor`]: walks the moving object back along its trajectory to first touch.
 //! - [`ContactConfiguration`]: state, reversing vector and the classified contact patches.
+//! - [`tool_surface_contacts`]: a rigid tool's vertices and edges pressing a deformable
+//!   surface between its vertices (the same eq. 1-3 tests, for the soft coupling).
 
 mod classify;
 mod contact;
@@ -14,6 +16,7 @@ mod motion;
 mod reconstruction;
 mod shape_cast;
 mod shapes;
+mod surface_contact;
 mod touch_mesh;
 
 pub use contact::{
@@ -21,4 +24,5 @@ pub use contact::{
 };
 pub use motion::RigidMotion;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
+pub use surface_contact::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot};
 pub use touch_mesh::{safe_step_length, Feature, TouchMesh, TouchMeshError};

@@ -1434,7 +1434,7 @@ pub(crate) fn ray_triangle(
 
 /// Edges `p0 p1` (moving, walked back by `s` along `-u`) and `q0 q1` (fixed): the `s` at
 /// which they cross, with the parameters along each edge and the unit normal `e × f`.
-fn edge_edge(
+pub(crate) fn edge_edge(
     p0: DVec3,
     p1: DVec3,
     q0: DVec3,

@@ -9,6 +9,10 @@ use crate::math::{Real, Vector};
 use glamx::{DMat3, DVec3};
 use std::collections::HashMap;
 
+mod constraints;
+pub use constraints::PointPress;
+use constraints::{constrain, PointHold};
+
 /// Why a surface could not be built or changed. Each variant says how to fix the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurfaceError {
@@ -49,6 +53,11 @@ pub enum SurfaceError {
     /// The named edge is not an edge of the mesh.
     #[error("({0}, {1}) is not an edge of the mesh")]
     NotAnEdge(u32, u32),
+    /// A point hold ([`MassSpringSurface::press_point`]) has no vertex or more than three, a
+    /// negative or non-finite weight, weights summing to zero, a zero or non-finite normal, or
+    /// a non-finite depth or velocity.
+    #[error("invalid point hold (1-3 vertices, weights >= 0 summing > 0, finite unit normal)")]
+    InvalidPointHold,
     /// The implicit filter could not be built.
     #[error(transparent)]
     Filter(#[from] FilterError),
@@ -481,6 +490,7 @@ impl MassSpringSurfaceBuilder {
             held: vec![false; n],
             held_normal: vec![DVec3::ZERO; n],
             any_held: false,
+            point_holds: Vec::new(),
         };
         s.build_vertex_edges();
         s.rebuild_free();
@@ -572,6 +582,7 @@ pub struct MassSpringSurface {
     /// For a sliding hold, the unit normal the holder supports; zero for a full hold.
     held_normal: Vec<DVec3>,
     any_held: bool,
+    point_holds: Vec<PointHold>,
 }
 
 const NOT_FREE: u32 = u32::MAX;
@@ -915,8 +926,9 @@ impl MassSpringSurface {
             *h = false;
         }
     }
-    /// Releases every held vertex.
+    /// Releases every held vertex and every held point.
     pub fn release_all(&mut self) {
+        self.point_holds.clear();
         if self.any_held {
             self.held.iter_mut().for_each(|h| *h = false);
             self.any_held = false;
@@ -1193,12 +1205,15 @@ impl MassSpringSurface {
             let gamma = (impulse - got) / total;
             self.dv.iter_mut().for_each(|dv| *dv += gamma);
         }
-        if self.any_held {
-            constrain_held(
+        if self.any_held || !self.point_holds.is_empty() {
+            constrain(
                 filter,
                 &self.free,
+                &self.free_index,
                 &self.held,
                 &self.held_normal,
+                &mut self.point_holds,
+                &self.vel,
                 &mut self.dv,
             );
         }
@@ -1358,75 +1373,5 @@ impl std::fmt::Debug for MassSpringSurface {
             .field("integrator", &self.integrator)
             .field("dt", &self.dt)
             .finish()
-    }
-}
-
-/// The holders' impulses in the filtered step: with `H` the held vertices' constrained
-/// directions `d` (the normal of a sliding hold, the three axes of a full hold), finds the
-/// impulses `λ` with `dᵀ (Δv + P d λ) = 0` for every constraint, where `P = S⁻¹ = W M⁻¹` is
-/// the filter as applied to impulses (exact or neighbour) — a small dense system
-/// `dₐᵀ P_ab d_b λ = -dₐᵀ Δv`, the capacitance matrix of the held set — and adds `P d λ` to
-/// `Δv`. The rest of the surface then responds to the held vertices as if they were pinned
-/// where the holder puts them, at any `s`, without refactoring the filter: `P`'s columns for
-/// the held vertices are the filter's own rows (neighbour) or one cached solve each (exact).
-fn constrain_held(
-    filter: &mut Filter,
-    free: &[u32],
-    held: &[bool],
-    held_normal: &[DVec3],
-    dv: &mut [DVec3],
-) {
-    // The held free vertices, and each one's slot.
-    let list: Vec<u32> = free
-        .iter()
-        .enumerate()
-        .filter(|(_, &v)| held[v as usize])
-        .map(|(fi, _)| fi as u32)
-        .collect();
-    let h = list.len();
-    if h == 0 {
-        return;
-    }
-    // Constraints: (slot, direction).
-    let mut cons: Vec<(usize, DVec3)> = Vec::with_capacity(h);
-    for (k, &fi) in list.iter().enumerate() {
-        let n = held_normal[free[fi as usize] as usize];
-        if n == DVec3::ZERO {
-            cons.extend([DVec3::X, DVec3::Y, DVec3::Z].map(|d| (k, d)));
-        } else {
-            cons.push((k, n));
-        }
-    }
-    // P restricted to the held vertices (h × h), one column read each.
-    let mut p_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
-    for (b, &fj) in list.iter().enumerate() {
-        filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
-    }
-    let m = cons.len();
-    let mut a_mat = nalgebra::DMatrix::<f64>::zeros(m, m);
-    let mut rhs = nalgebra::DVector::<f64>::zeros(m);
-    for (a, (ka, da)) in cons.iter().enumerate() {
-        rhs[a] = -da.dot(dv[list[*ka] as usize]);
-        for (b, (kb, db)) in cons.iter().enumerate() {
-            a_mat[(a, b)] = da.dot(*db) * p_hh[(*ka, *kb)];
-        }
-    }
-    let lambda = match a_mat.clone().cholesky() {
-        Some(ch) => ch.solve(&rhs),
-        None => match a_mat.lu().solve(&rhs) {
-            Some(x) => x,
-            None => return,
-        },
-    };
-    if !lambda.iter().all(|x| x.is_finite()) {
-        return;
-    }
-    let mut impulse = vec![DVec3::ZERO; h];
-    for (c, (k, d)) in cons.iter().enumerate() {
-        impulse[*k] += *d * lambda[c];
-    }
-    for (k, &fj) in list.iter().enumerate() {
-        let j = impulse[k];
-        filter.for_column(fj, |i, w| dv[i as usize] += j * w);
     }
 }

@@ -14,5 +14,5 @@ pub mod meshing;
 pub use filter::{FilterError, FilterKind};
 pub use mass_spring_surface::{
     ForceProfile, Integrator, MassDistribution, MassSpringSurface, MassSpringSurfaceBuilder,
-    SpringModel, SurfaceError,
+    PointPress, SpringModel, SurfaceError,
 };

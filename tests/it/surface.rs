@@ -549,3 +549,62 @@ fn held_vertices_act_as_pins_inside_the_filter_at_large_s() {
         assert!((s.displacement(held as u32).y + 0.1).abs() < 1e-6);
     }
 }
+
+/// Bad point presses are errors and change nothing; a press on pinned vertices only, or on a
+/// held vertex, is not held; a good one moves its point exactly by its depth.
+#[test]
+fn bad_point_presses_are_errors() {
+    let (v, t) = grid(2, 2, 1.0);
+    let mut s = MassSpringSurfaceBuilder::new(v, t)
+        .pinned([0])
+        .build()
+        .unwrap();
+    let down = Vector::new(0.0, -1.0, 0.0);
+    let before: Vec<Vector> = (0..s.num_vertices() as u32)
+        .map(|i| s.position(i))
+        .collect();
+    type Press<'a> = (&'a [(u32, f32)], Vector, f32, f32);
+    let bad: [Press<'_>; 8] = [
+        (&[], down, 0.01, 0.0),
+        (&[(1, 0.5), (2, 0.5), (3, 0.0), (4, 0.0)], down, 0.01, 0.0),
+        (&[(1, -0.5), (2, 1.5)], down, 0.01, 0.0),
+        (&[(1, 0.0), (2, 0.0)], down, 0.01, 0.0),
+        (&[(1, f32::NAN), (2, 0.5)], down, 0.01, 0.0),
+        (&[(1, 0.5), (2, 0.5)], Vector::ZERO, 0.01, 0.0),
+        (&[(1, 0.5), (2, 0.5)], down, f32::INFINITY, 0.0),
+        (&[(1, 0.5), (2, 0.5)], down, 0.01, f32::NAN),
+    ];
+    for (w, n, d, vel) in bad {
+        assert_eq!(
+            s.press_point(w, n, d, vel),
+            Err(SurfaceError::InvalidPointHold),
+            "{w:?} {n:?} {d} {vel}"
+        );
+    }
+    assert!(matches!(
+        s.press_point(&[(99, 1.0)], down, 0.01, 0.0),
+        Err(SurfaceError::VertexOutOfRange { .. })
+    ));
+    let after: Vec<Vector> = (0..s.num_vertices() as u32)
+        .map(|i| s.position(i))
+        .collect();
+    assert_eq!(before, after);
+    assert_eq!(s.num_point_holds(), 0);
+    // Only a pinned vertex: nothing to move.
+    assert_eq!(s.press_point(&[(0, 1.0)], down, 0.01, 0.0), Ok(None));
+    // On a held vertex: its holder carries it.
+    s.hold(4).unwrap();
+    assert_eq!(
+        s.press_point(&[(4, 0.5), (5, 0.5)], down, 0.01, 0.0),
+        Ok(None)
+    );
+    // Two free vertices: the midpoint moves 1 cm down, equal masses share it equally.
+    let id = s
+        .press_point(&[(1, 0.5), (2, 0.5)], down, 0.01, 0.0)
+        .unwrap();
+    assert!(id.is_some());
+    let mid = (s.position(1) + s.position(2)) * 0.5;
+    let mid0 = (before[1] + before[2]) * 0.5;
+    assert!((mid - mid0 - down * 0.01).length() < 1e-6);
+    assert!((s.position(1) - s.position(2) - (before[1] - before[2])).length() < 1e-6);
+}

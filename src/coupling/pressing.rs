@@ -1,0 +1,162 @@
+//! How a polyhedral tool's sharp features press a surface between its vertices in one surface
+//! substep: the geometry layer finds the tool's vertices inside surface triangles and its edges
+//! across surface edges ([`crate::geometry::tool_surface_contacts`]); each contact point is
+//! pushed onto the tool and held there along the contact normal
+//! ([`MassSpringSurface::press_point`]), loading the vertices around it by their weights inside
+//! the filter's constraint solve. The tool gets the impulses those holds gave in the next
+//! surface step.
+
+use crate::geometry::{tool_surface_contacts, Feature, SurfaceContact, SurfaceSnapshot, TouchMesh};
+use crate::math::{Pose, Real, Vector};
+use crate::surface::{MassSpringSurface, PointPress};
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use rapier3d::geometry::ColliderHandle;
+
+/// A point a tool pressed in the last substep (surface frame).
+#[derive(Copy, Clone, Debug)]
+pub(super) struct Pressed {
+    pub tool: ColliderHandle,
+    /// The hold's index in the surface ([`MassSpringSurface::point_impulse`]).
+    pub id: usize,
+    /// Unit direction from the tool into the surface.
+    pub normal: Vector,
+    pub point: Vector,
+    pub feature: Feature,
+    /// How far the tool's feature moved along the normal in its substep (m).
+    pub travel: Real,
+    /// The impulse the hold gave in the surface step after it (N·s, along `normal`), filled in
+    /// by [`record_impulses`].
+    pub impulse: Real,
+}
+
+/// Reads the impulses the holds of `pressed` gave in the surface step just taken (before the
+/// surface releases them).
+pub(super) fn record_impulses(surface: &MassSpringSurface, pressed: &mut [Pressed]) {
+    for p in pressed {
+        p.impulse = surface.point_impulse(p.id).unwrap_or(0.0);
+    }
+}
+
+/// Force (on the tool, surface frame), `Σ p × f` and count of the points `tool` pressed during
+/// the surface step just taken (`h` its time step). A hold that pulled (negative impulse)
+/// gives no force.
+pub(super) fn reaction_of(
+    pressed: &[Pressed],
+    tool: ColliderHandle,
+    h: Real,
+) -> (Vector, Vector, usize) {
+    let (mut force, mut moment, mut count) = (Vector::ZERO, Vector::ZERO, 0);
+    if h <= 0.0 {
+        return (force, moment, count);
+    }
+    for p in pressed.iter().filter(|p| p.tool == tool) {
+        if p.impulse > 0.0 {
+            let f = -p.normal * (p.impulse / h);
+            force += f;
+            moment += p.point.cross(f);
+            count += 1;
+        }
+    }
+    (force, moment, count)
+}
+
+/// Finds the contacts of `mesh` (moving from `start` to `end`, surface frame) with the surface
+/// (`before`: positions at the start of the substep, `now`: at its end) and appends them to
+/// `contacts`, with the tool's velocity along each contact's normal in `velocities`. A feature
+/// that pushed in the last substep (`last`, of tool `tool`) stays in contact up to the gap its
+/// hold's velocity can have opened (its travel then and now) above the surface.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn find_contacts(
+    triangles: &[[u32; 3]],
+    mesh: &TouchMesh,
+    start: &Pose,
+    end: &Pose,
+    h: Real,
+    before: &[Vector],
+    now: &[Vector],
+    tool: ColliderHandle,
+    last: &[Pressed],
+    candidates: &mut Vec<u32>,
+    contacts: &mut Vec<SurfaceContact>,
+    velocities: &mut Vec<Real>,
+) {
+    let local = mesh.local_aabb();
+    let swept: Aabb = local.transform_by(start).merged(&local.transform_by(end));
+    let margin = 1e-6 * (1.0 + swept.extents().max_element());
+    let snapshot = SurfaceSnapshot {
+        before,
+        now,
+        triangles,
+    };
+    snapshot.triangles_near(&swept.loosened(2.0 * margin), candidates);
+    if candidates.is_empty() {
+        return;
+    }
+    let first = contacts.len();
+    let step = |f: Feature| {
+        let local = match f {
+            Feature::Vertex(v) => mesh.vertices().get(v as usize).copied(),
+            Feature::Edge([a, _]) => mesh.vertices().get(a as usize).copied(),
+            _ => None,
+        };
+        local.map_or(0.0, |p| {
+            (end.transform_point(p) - start.transform_point(p)).length()
+        })
+    };
+    let gap = |f: Feature| {
+        last.iter()
+            .filter(|p| p.tool == tool && p.feature == f && p.impulse > 0.0)
+            .map(|p| p.travel + step(f))
+            .fold(0.0, Real::max)
+    };
+    tool_surface_contacts(
+        &snapshot, candidates, mesh, start, end, margin, &gap, contacts,
+    );
+    for c in &contacts[first..] {
+        // The tool's material point under the contact: its velocity along the normal.
+        let material = end.inverse_transform_point(c.point);
+        velocities.push(if h > 0.0 {
+            (c.point - start.transform_point(material)).dot(c.normal) / h
+        } else {
+            0.0
+        });
+    }
+}
+
+/// Presses every contact (all tools together, so presses sharing a vertex do not undo each
+/// other) and records them in `pressed` (`owners[i]`: the tool of `contacts[i]`).
+pub(super) fn press_all(
+    surface: &mut MassSpringSurface,
+    contacts: &[SurfaceContact],
+    velocities: &[Real],
+    owners: &[ColliderHandle],
+    h: Real,
+    pressed: &mut Vec<Pressed>,
+) {
+    let presses: Vec<PointPress<'_>> = contacts
+        .iter()
+        .zip(velocities)
+        .map(|(c, &v)| PointPress {
+            vertices: c.weights(),
+            normal: c.normal,
+            depth: c.depth,
+            normal_velocity: v,
+        })
+        .collect();
+    let Ok(ids) = surface.press_points(&presses) else {
+        return;
+    };
+    for (((c, id), tool), v) in contacts.iter().zip(ids).zip(owners).zip(velocities) {
+        if let Some(id) = id {
+            pressed.push(Pressed {
+                tool: *tool,
+                id,
+                normal: c.normal,
+                point: c.point,
+                feature: c.tool_feature,
+                travel: (v * h).abs(),
+                impulse: 0.0,
+            });
+        }
+    }
+}

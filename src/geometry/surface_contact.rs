@@ -1,0 +1,297 @@
+//! Contacts between a rigid polyhedral tool and a deformable surface mesh: where the tool's
+//! sharp features (its vertices and edges) press into the surface between the surface's
+//! vertices.
+//!
+//! The surface vertex inside the tool (eq. 1-2 with the surface vertex as the moving point) is
+//! handled by the coupling, which walks each such vertex back to the tool's boundary. This file
+//! gives the other two kinds of section 2, with the surface taken as fixed at its current shape
+//! over a substep and the tool as the moving object:
+//!
+//! - **a tool vertex inside a surface triangle** (eq. 3, the paper's special situation: a vertex
+//!   of one object on a face of the other). The line through the tool vertex along the
+//!   triangle's normal cuts the triangle at `P` ([`super::reconstruction::ray_triangle`], the
+//!   same test the rigid reconstruction uses); the surface point `P` is pushed to the vertex's
+//!   plane along the normal and loads the triangle's three vertices by their barycentric
+//!   weights;
+//! - **a tool edge across a surface edge**, the 3D kind the paper's 2D argument misses
+//!   ([`super::reconstruction::edge_edge`], shared with the rigid reconstruction); the surface
+//!   point loads the surface edge's two vertices. The push is along the surface's normal less
+//!   its part along the tool's edge, not along the rigid case's `e × f`: a deformable surface
+//!   has many edges nearly parallel to a tool edge lying in it, and `e × f` swings wildly
+//!   between them (tangential pushes a frictionless contact must not give).
+//!
+//! A feature is in contact when it lies below the surface (within `margin`) at the end of the
+//! substep, by no more than it and the surface around it moved over the substep (a feature
+//! farther below did not get there in this substep: it is on the far side of a surface the
+//! tool does not press there). Below means on the side away from the tool's centre at the start
+//! of the substep. A feature may also be in contact above the surface, by up to the gap the
+//! caller allows it (`gap`: a feature that pressed in the last substep, whose hold carried the
+//! surface on with the tool's old velocity after the tool slowed down). Flat tool edges (the diagonals of a
+//! triangulated face) are skipped: a face is held through its vertices and its real edges.
+
+use super::reconstruction::{edge_edge, ray_triangle};
+use super::touch_mesh::{Feature, TouchMesh};
+use crate::math::{Pose, Real, Vector};
+use glamx::DVec3;
+use parry3d::bounding_volume::Aabb;
+
+/// One contact of a tool feature with a surface point (everything in the surface's frame).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct SurfaceContact {
+    /// The tool's vertex or edge in contact ([`TouchMesh`] indices of the tool).
+    pub tool_feature: Feature,
+    /// The surface vertices carrying the contact point and their weights (summing to one):
+    /// three for a point inside a triangle, two for a point on an edge.
+    pub surface: [(u32, Real); 3],
+    /// How many entries of `surface` are used (2 or 3).
+    pub count: usize,
+    /// Unit direction from the tool into the surface: where the surface point is pushed.
+    pub normal: Vector,
+    /// How far the surface point must move along `normal` to reach the tool's feature
+    /// (positive: the feature is below the surface; at most `-margin` above it).
+    pub depth: Real,
+    /// The contact point on the tool.
+    pub point: Vector,
+}
+
+impl SurfaceContact {
+    /// The `(vertex, weight)` pairs used.
+    pub fn weights(&self) -> &[(u32, Real)] {
+        &self.surface[..self.count]
+    }
+}
+
+/// The surface over one substep: positions at its start and end, and its triangles.
+#[derive(Copy, Clone, Debug)]
+pub struct SurfaceSnapshot<'a> {
+    /// Vertex positions at the start of the substep.
+    pub before: &'a [Vector],
+    /// Vertex positions now (end of the substep).
+    pub now: &'a [Vector],
+    /// The triangles (vertex indices).
+    pub triangles: &'a [[u32; 3]],
+}
+
+impl SurfaceSnapshot<'_> {
+    fn tri(&self, pos: &[Vector], t: u32) -> Option<[DVec3; 3]> {
+        let idx = self.triangles.get(t as usize)?;
+        let mut out = [DVec3::ZERO; 3];
+        for (o, &v) in out.iter_mut().zip(idx) {
+            *o = pos.get(v as usize)?.as_dvec3();
+        }
+        Some(out)
+    }
+
+    /// The triangles whose bounds over the substep (start and end) meet `aabb`: the candidates
+    /// for [`tool_surface_contacts`]. A linear scan (a BVH refit per substep costs as much).
+    pub fn triangles_near(&self, aabb: &Aabb, out: &mut Vec<u32>) {
+        out.clear();
+        for (t, idx) in self.triangles.iter().enumerate() {
+            let mut lo = Vector::splat(Real::MAX);
+            let mut hi = Vector::splat(Real::MIN);
+            for &v in idx {
+                for pos in [self.before, self.now] {
+                    if let Some(p) = pos.get(v as usize) {
+                        lo = lo.min(*p);
+                        hi = hi.max(*p);
+                    }
+                }
+            }
+            if lo.cmple(aabb.maxs).all() && hi.cmpge(aabb.mins).all() {
+                out.push(t as u32);
+            }
+        }
+    }
+}
+
+/// Smallest cosine between an edge-edge contact normal and the surface triangle's normal (a
+/// tool edge standing nearly straight into the surface is pressed by its lowest vertex).
+const MIN_EDGE_NORMAL_COS: f64 = 0.2;
+/// Smallest sine of the angle between a tool edge and a surface edge for an edge-edge contact.
+const MIN_EDGE_SINE: f64 = 0.1;
+
+fn unit_normal(t: &[DVec3; 3]) -> Option<DVec3> {
+    (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()
+}
+
+/// The contacts of `tool` (moving from `start` to `end`, poses in the surface's frame) with the
+/// candidate triangles of `surface` (see the module docs), appended to `out`. `gap(feature)`
+/// is how far above the surface a tool feature still counts as in contact (at least
+/// `margin`). Each tool vertex
+/// gets at most one contact (the triangle it is most inside); each tool edge one per surface edge it
+/// crosses.
+///
+/// # Example
+/// A cube turned corner-down, its lowest corner 1 cm under a flat two-triangle square:
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::geometry::{tool_surface_contacts, Feature, SurfaceSnapshot};
+///
+/// let square = [
+///     Vector::new(-1.0, 0.0, -1.0), Vector::new(1.0, 0.0, -1.0),
+///     Vector::new(1.0, 0.0, 1.0), Vector::new(-1.0, 0.0, 1.0),
+/// ];
+/// let triangles = [[0, 2, 1], [0, 3, 2]];
+/// let surface = SurfaceSnapshot { before: &square, now: &square, triangles: &triangles };
+/// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.1))).unwrap();
+/// // Body diagonal (1, 1, 1) turned onto +y: one corner points straight down.
+/// let tilt = Rotation::from_rotation_arc(Vector::ONE.normalize(), Vector::Y);
+/// let corner = 0.1 * 3f32.sqrt();
+/// let start = Pose::from_parts(Vector::new(0.3, corner + 0.01, 0.1), tilt);
+/// let end = Pose::from_parts(Vector::new(0.3, corner - 0.01, 0.1), tilt);
+/// let mut out = Vec::new();
+/// tool_surface_contacts(&surface, &[0, 1], &cube, &start, &end, 1e-6, &|_| 0.0, &mut out);
+/// assert_eq!(out.len(), 1);
+/// let c = &out[0];
+/// assert!(matches!(c.tool_feature, Feature::Vertex(_)));
+/// assert!((c.depth - 0.01).abs() < 1e-5);
+/// assert!((c.normal - Vector::new(0.0, -1.0, 0.0)).length() < 1e-5);
+/// assert!((c.point - Vector::new(0.3, -0.01, 0.1)).length() < 1e-5);
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub fn tool_surface_contacts(
+    surface: &SurfaceSnapshot<'_>,
+    candidates: &[u32],
+    tool: &TouchMesh,
+    start: &Pose,
+    end: &Pose,
+    margin: Real,
+    gap: &dyn Fn(Feature) -> Real,
+    out: &mut Vec<SurfaceContact>,
+) {
+    let margin = margin.max(0.0) as f64;
+    let centre = start.transform_point(tool.local_aabb().center()).as_dvec3();
+    let tool_end: Vec<DVec3> = tool
+        .vertices()
+        .iter()
+        .map(|v| end.transform_point(*v).as_dvec3())
+        .collect();
+    let tool_start: Vec<DVec3> = tool
+        .vertices()
+        .iter()
+        .map(|v| start.transform_point(*v).as_dvec3())
+        .collect();
+    // Per candidate triangle: now, before, and the unit normal toward the tool (now, before).
+    let mut tris = Vec::with_capacity(candidates.len());
+    for &t in candidates {
+        let (Some(now), Some(before)) =
+            (surface.tri(surface.now, t), surface.tri(surface.before, t))
+        else {
+            continue;
+        };
+        let (Some(n), Some(nb)) = (unit_normal(&now), unit_normal(&before)) else {
+            continue;
+        };
+        let sign = if (centre - before[0]).dot(nb) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        // How far the triangle's points moved over the substep.
+        let moved = (0..3)
+            .map(|k| (now[k] - before[k]).length())
+            .fold(0.0, f64::max);
+        tris.push((t, now, n * sign, moved));
+    }
+    // Tool vertex inside a surface triangle.
+    for (v, (&p1, &p0)) in tool_end.iter().zip(&tool_start).enumerate() {
+        let feature = Feature::Vertex(v as u32);
+        let mut best: Option<(f64, SurfaceContact)> = None;
+        let travel = (p1 - p0).length() + margin;
+        let above = margin.max(gap(feature) as f64);
+        for (t, now, n, moved) in &tris {
+            let h1 = (p1 - now[0]).dot(*n);
+            if h1 > above || -h1 > travel + moved {
+                continue;
+            }
+            // The line through the vertex along the normal cuts the triangle (eq. 3).
+            let Some((_, bary)) = ray_triangle(p1, *n, now, -f64::MAX, f64::MAX) else {
+                continue;
+            };
+            let inside = bary[0].min(bary[1]).min(bary[2]);
+            if best.as_ref().is_some_and(|(b, _)| *b >= inside) {
+                continue;
+            }
+            let idx = surface.triangles[*t as usize];
+            let w = bary.map(|b| b.clamp(0.0, 1.0));
+            let sum = w[0] + w[1] + w[2];
+            if sum <= 0.0 {
+                continue;
+            }
+            best = Some((
+                inside,
+                SurfaceContact {
+                    tool_feature: feature,
+                    surface: [0, 1, 2].map(|k| (idx[k], (w[k] / sum) as Real)),
+                    count: 3,
+                    normal: (-*n).as_vec3(),
+                    depth: (-h1) as Real,
+                    point: p1.as_vec3(),
+                },
+            ));
+        }
+        out.extend(best.map(|(_, c)| c));
+    }
+    // Tool edge across a surface edge.
+    let mut seen = parry3d::utils::hashset::HashSet::default();
+    for (e, &[a, b]) in tool.edges().iter().enumerate() {
+        let [ta, tb] = tool.edge_triangles(e as u32);
+        if tool.triangle_normal(ta).dot(tool.triangle_normal(tb)) > 1.0 - 1e-6 {
+            continue; // a diagonal of a flat face
+        }
+        let feature = Feature::Edge([a.min(b), a.max(b)]);
+        let (p0, p1) = (tool_end[a as usize], tool_end[b as usize]);
+        let (s0, s1) = (tool_start[a as usize], tool_start[b as usize]);
+        seen.clear();
+        let travel = (p0 - s0).length().max((p1 - s1).length()) + margin;
+        let above = margin.max(gap(feature) as f64);
+        for (t, now, n, moved) in &tris {
+            let idx = surface.triangles[*t as usize];
+            for k in 0..3 {
+                let (i, j) = (idx[k], idx[(k + 1) % 3]);
+                if !seen.insert((i.min(j), i.max(j))) {
+                    continue;
+                }
+                let (q0, q1) = (now[k], now[(k + 1) % 3]);
+                // Nearly parallel edges cross at no definite point: the tool's vertices and the
+                // surface's own vertices carry such a contact.
+                let (e_dir, f_dir) = (p1 - p0, q1 - q0);
+                if e_dir.cross(f_dir).length() < MIN_EDGE_SINE * e_dir.length() * f_dir.length() {
+                    continue;
+                }
+                // Frictionless: the push is along the surface's normal, less its part along
+                // the tool's edge (a force along the edge has no contact to act on), into the
+                // surface.
+                let Some(e_unit) = e_dir.try_normalize() else {
+                    continue;
+                };
+                let Some(u) = (-(*n - e_unit * e_unit.dot(*n))).try_normalize() else {
+                    continue;
+                };
+                if -u.dot(*n) < MIN_EDGE_NORMAL_COS {
+                    continue;
+                }
+                // Walking the tool edge back along -u by `depth` makes the edges cross.
+                let Some((depth, alpha, beta, _)) =
+                    edge_edge(p0, p1, q0, q1, u, -above, travel + moved)
+                else {
+                    continue;
+                };
+                const INTERIOR: f64 = 1e-6;
+                if !(INTERIOR..=1.0 - INTERIOR).contains(&alpha)
+                    || !(INTERIOR..=1.0 - INTERIOR).contains(&beta)
+                {
+                    continue;
+                }
+                out.push(SurfaceContact {
+                    tool_feature: feature,
+                    surface: [(i, (1.0 - beta) as Real), (j, beta as Real), (0, 0.0)],
+                    count: 2,
+                    normal: u.as_vec3(),
+                    depth: depth as Real,
+                    point: (p0 + (p1 - p0) * alpha).as_vec3(),
+                });
+            }
+        }
+    }
+}

@@ -1,0 +1,534 @@
+//! What holds a surface from outside during a filtered step: vertex holds (a tool holding a
+//! vertex, fully or along a normal) and point holds (a tool's vertex or edge pressing a point
+//! inside a triangle or on an edge, which loads the vertices around it by barycentric
+//! weights). Both are solved together through the filter's columns, so the rest of the
+//! surface responds to them as to moving pins.
+
+use super::{MassSpringSurface, SurfaceError, NOT_FREE};
+use crate::math::{Real, Vector};
+use crate::surface::filter::Filter;
+use glamx::DVec3;
+
+/// A point of the surface, `Σ wⱼ xⱼ` over up to three vertices, pressed along a normal by
+/// something outside it (see [`MassSpringSurface::press_point`]).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct PointHold {
+    vertices: [u32; 3],
+    weights: [f64; 3],
+    count: usize,
+    /// Unit direction the holder pushes the point in.
+    normal: DVec3,
+    /// The impulse (N·s, along `normal`) the holder gave in the last step.
+    impulse: f64,
+    /// The least velocity along `normal` the point may have after the step: the holder's for
+    /// a point in contact; less by `gap / dt` for a point `gap` short of its holder (it may
+    /// close the gap, not pass the holder).
+    min_velocity: f64,
+}
+
+impl PointHold {
+    fn entries(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
+        self.vertices[..self.count]
+            .iter()
+            .copied()
+            .zip(self.weights[..self.count].iter().copied())
+    }
+}
+
+/// The least weight a pressed point must have on vertices that can move.
+const MIN_MOVABLE_WEIGHT: f64 = 0.25;
+
+/// One point to press (see [`MassSpringSurface::press_points`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PointPress<'a> {
+    /// Up to three `(vertex, weight)` pairs, weights ≥ 0 (normalised to sum to one): the
+    /// surface point `Σ wⱼ xⱼ`.
+    pub vertices: &'a [(u32, Real)],
+    /// The direction the holder pushes the point in (normalised).
+    pub normal: Vector,
+    /// How far to move the point along `normal` now (m).
+    pub depth: Real,
+    /// The point's velocity along `normal` from now on (m/s): the holder's.
+    pub normal_velocity: Real,
+}
+
+impl MassSpringSurface {
+    /// Presses one surface point: [`MassSpringSurface::press_points`] with one press.
+    ///
+    /// # Errors
+    /// As [`MassSpringSurface::press_points`].
+    ///
+    /// # Example
+    /// A needle tip pressing 1 cm into the middle of a triangle of a plate, held there:
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::surface::meshing::plate;
+    ///
+    /// let mesh = plate(1.0, 1.0, 4, 4);
+    /// let rim = |v: Vector| v.x.abs() > 0.49 || v.z.abs() > 0.49;
+    /// let edge: Vec<u32> = (0..mesh.vertices.len() as u32)
+    ///     .filter(|&i| rim(mesh.vertices[i as usize]))
+    ///     .collect();
+    /// let mut surface = MassSpringSurfaceBuilder::from_mesh(&mesh).pinned(edge).build().unwrap();
+    /// // A triangle with no pinned vertex.
+    /// let [a, b, c] = *surface
+    ///     .triangles()
+    ///     .iter()
+    ///     .find(|t| t.iter().all(|&v| !surface.is_pinned(v)))
+    ///     .unwrap();
+    /// let point = |s: &MassSpringSurface| (s.position(a) + s.position(b) + s.position(c)) / 3.0;
+    /// let third = 1.0 / 3.0;
+    /// let down = Vector::new(0.0, -1.0, 0.0);
+    /// let id = surface.press_point(&[(a, third), (b, third), (c, third)], down, 0.01, 0.0);
+    /// let id = id.unwrap().unwrap();
+    /// assert!((point(&surface).y + 0.01).abs() < 1e-6);
+    /// surface.step();
+    /// // Held along the normal: the springs did not pull the point back up.
+    /// assert!((point(&surface).y + 0.01).abs() < 1e-6);
+    /// assert!(surface.point_impulse(id).unwrap() > 0.0);
+    /// ```
+    pub fn press_point(
+        &mut self,
+        vertices: &[(u32, Real)],
+        normal: Vector,
+        depth: Real,
+        normal_velocity: Real,
+    ) -> Result<Option<usize>, SurfaceError> {
+        let press = PointPress {
+            vertices,
+            normal,
+            depth,
+            normal_velocity,
+        };
+        Ok(self.press_points(&[press])?.pop().flatten())
+    }
+
+    /// Presses surface points — a tool's vertex inside a triangle (the paper's eq. 3 situation),
+    /// a tool's edge across a surface edge — each by its `depth` along its `normal`, gives each
+    /// its `normal_velocity`, and holds them there along their normals for the next step, until
+    /// [`MassSpringSurface::release_all`].
+    ///
+    /// The position and velocity changes are the least mass-weighted ones that give every point
+    /// its depth and velocity together (a small dense solve over the points: presses sharing a
+    /// vertex do not undo each other). Pinned and held vertices do not move. In the next
+    /// filtered step each point keeps its normal velocity: its impulse is solved with the vertex
+    /// holds' through the filter's columns at its vertices; it is free along its tangent plane
+    /// (frictionless), and a point whose impulse would pull is let go. A press the others'
+    /// pushes already satisfy (pushing one point of a triangle moves its neighbours) is left
+    /// where they put it and held as a speculative contact: over the next step it may close its
+    /// gap to the holder, not pass it. A negative `depth` (a point its last hold carried past
+    /// a holder that stopped) moves the point back to the holder. Returns each press's index
+    /// for [`MassSpringSurface::point_impulse`], or `None` for a press on a held vertex (its
+    /// holder carries the contact there) or with less than a quarter of its weight on free
+    /// vertices (its pinned vertices carry it). The explicit and Baraff-Witkin integrators apply
+    /// the position and velocity changes but do not hold the points during the step.
+    ///
+    /// # Errors
+    /// [`SurfaceError::VertexOutOfRange`]; [`SurfaceError::InvalidPointHold`] for a press with
+    /// no vertex or more than three, a negative or non-finite weight, weights summing to zero, a
+    /// zero or non-finite normal, a non-finite depth or velocity. Nothing is pressed then.
+    pub fn press_points(
+        &mut self,
+        presses: &[PointPress<'_>],
+    ) -> Result<Vec<Option<usize>>, SurfaceError> {
+        let mut holds = Vec::with_capacity(presses.len());
+        for p in presses {
+            holds.push(self.point_hold(p)?);
+        }
+        // The movable share of each vertex: 1/m, zero for pinned and held vertices.
+        let inv_mass = |s: &Self, v: u32| {
+            let v = v as usize;
+            if s.pinned[v] || s.held[v] {
+                0.0
+            } else {
+                1.0 / s.mass[v]
+            }
+        };
+        let mut out = Vec::with_capacity(presses.len());
+        let mut kept: Vec<(PointHold, f64, f64)> = Vec::new();
+        for (hold, p) in holds.into_iter().zip(presses) {
+            // The weight on vertices that can move: a point mostly on pinned or held vertices
+            // is carried by them (moving it would fling its free vertex by depth / weight).
+            let movable: f64 = hold
+                .entries()
+                .filter(|&(v, _)| inv_mass(self, v) > 0.0)
+                .map(|(_, w)| w)
+                .sum();
+            // A point on a held vertex is left to that vertex's holder, which already
+            // carries the contact there.
+            let on_held = hold
+                .entries()
+                .any(|(v, w)| w > 0.0 && self.held[v as usize]);
+            if movable >= MIN_MOVABLE_WEIGHT && !on_held {
+                let velocity: f64 = hold
+                    .entries()
+                    .map(|(v, w)| w * self.vel[v as usize].dot(hold.normal))
+                    .sum();
+                out.push(Some(self.point_holds.len() + kept.len()));
+                kept.push((hold, p.depth as f64, p.normal_velocity as f64 - velocity));
+            } else {
+                out.push(None);
+            }
+        }
+        let m = kept.len();
+        if m == 0 {
+            return Ok(out);
+        }
+        // A = J M⁻¹ Jᵀ over the kept presses; δx = M⁻¹ Jᵀ μ with A μ = depth (likewise for the
+        // velocities).
+        let mut a = nalgebra::DMatrix::<f64>::zeros(m, m);
+        for (i, (hi, _, _)) in kept.iter().enumerate() {
+            for (j, (hj, _, _)) in kept.iter().enumerate() {
+                let nn = hi.normal.dot(hj.normal);
+                let mut sum = 0.0;
+                for (vi, wi) in hi.entries() {
+                    for (vj, wj) in hj.entries() {
+                        if vi == vj {
+                            sum += wi * wj * inv_mass(self, vi);
+                        }
+                    }
+                }
+                a[(i, j)] = nn * sum;
+            }
+        }
+        let scale = (0..m).map(|i| a[(i, i)]).fold(0.0, f64::max);
+        for i in 0..m {
+            a[(i, i)] += 1e-12 * scale;
+        }
+        let depth: Vec<f64> = kept.iter().map(|k| k.1).collect();
+        let active = press_active_set(&a, &depth);
+        let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
+        let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
+        let rhs = nalgebra::DMatrix::from_fn(rows.len(), 2, |r, c| {
+            if c == 0 {
+                kept[rows[r]].1
+            } else {
+                kept[rows[r]].2
+            }
+        });
+        let mu = match sub.clone().cholesky() {
+            Some(ch) => Some(ch.solve(&rhs)),
+            None => sub.lu().solve(&rhs),
+        };
+        let Some(mu) = mu.filter(|mu| mu.iter().all(|x| x.is_finite())) else {
+            return Ok(out.iter().map(|_| None).collect());
+        };
+        for (r, &i) in rows.iter().enumerate() {
+            let hold = &kept[i].0;
+            for (v, w) in hold.entries() {
+                let share = w * inv_mass(self, v);
+                self.pos[v as usize] += hold.normal * (share * mu[(r, 0)]);
+                self.vel[v as usize] += hold.normal * (share * mu[(r, 1)]);
+            }
+        }
+        // A press the others' pushes already satisfy is left `gap` short of its holder: it is
+        // held as a speculative contact that may close the gap over the next step, not more.
+        for (i, k) in kept.iter_mut().enumerate() {
+            if active[i] {
+                continue;
+            }
+            let moved: f64 = rows
+                .iter()
+                .enumerate()
+                .map(|(r, &j)| a[(i, j)] * mu[(r, 0)])
+                .sum();
+            let gap = (moved - k.1).max(0.0);
+            let velocity: f64 =
+                k.0.entries()
+                    .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
+                    .sum();
+            // The holder's velocity, as given, is the current point velocity plus `k.2`.
+            k.0.min_velocity = velocity + k.2 - gap / self.dt;
+        }
+        self.point_holds.extend(kept.into_iter().map(|(h, _, _)| h));
+        Ok(out)
+    }
+
+    /// A press checked and normalised.
+    fn point_hold(&self, p: &PointPress<'_>) -> Result<PointHold, SurfaceError> {
+        let vertices = p.vertices;
+        if vertices.is_empty() || vertices.len() > 3 {
+            return Err(SurfaceError::InvalidPointHold);
+        }
+        for &(v, w) in vertices {
+            self.check_vertex(v)?;
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(SurfaceError::InvalidPointHold);
+            }
+        }
+        let total: f64 = vertices.iter().map(|&(_, w)| w as f64).sum();
+        let n = p.normal.as_dvec3().try_normalize();
+        let (Some(n), true, true) = (
+            n,
+            total > 0.0 && total.is_finite(),
+            p.depth.is_finite() && p.normal_velocity.is_finite(),
+        ) else {
+            return Err(SurfaceError::InvalidPointHold);
+        };
+        let mut hold = PointHold {
+            vertices: [0; 3],
+            weights: [0.0; 3],
+            count: vertices.len(),
+            normal: n,
+            impulse: 0.0,
+            min_velocity: p.normal_velocity as f64,
+        };
+        for (k, &(v, w)) in vertices.iter().enumerate() {
+            hold.vertices[k] = v;
+            hold.weights[k] = w as f64 / total;
+        }
+        Ok(hold)
+    }
+
+    /// The impulse (N·s, along its normal; positive when pushing) hold `id` of
+    /// [`MassSpringSurface::press_point`] gave the surface during the last step, or `None`
+    /// for no such hold. Zero until a filtered step has run with it.
+    pub fn point_impulse(&self, id: usize) -> Option<Real> {
+        self.point_holds.get(id).map(|h| h.impulse as Real)
+    }
+
+    /// How many points are held (see [`MassSpringSurface::press_point`]).
+    pub fn num_point_holds(&self) -> usize {
+        self.point_holds.len()
+    }
+}
+
+/// Which presses push (an active set for `A μ = d`, `A = J M⁻¹ Jᵀ`): a press with `d ≥ 0` may
+/// only push (`μ ≥ 0`); one with `d < 0` (a point carried past its holder) may pull back; a
+/// press left out must end satisfied (`d - (A μ) ≤ 0`: the others' pushes moved it far
+/// enough). Each pass drops the most pulling press or adds the most violated one; bounded.
+fn press_active_set(a: &nalgebra::DMatrix<f64>, d: &[f64]) -> Vec<bool> {
+    let m = d.len();
+    let mut active = vec![true; m];
+    let scale = d
+        .iter()
+        .fold(0.0, |s: f64, x| s.max(x.abs()))
+        .max(f64::MIN_POSITIVE);
+    let tol = 1e-9 * scale;
+    for _ in 0..2 * m + 2 {
+        let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
+        let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
+        let rhs = nalgebra::DVector::from_fn(rows.len(), |r, _| d[rows[r]]);
+        let mu = match sub.clone().cholesky() {
+            Some(ch) => ch.solve(&rhs),
+            None => match sub.lu().solve(&rhs) {
+                Some(x) => x,
+                None => return active,
+            },
+        };
+        // The most pulling press that may not pull.
+        let pulling = rows
+            .iter()
+            .enumerate()
+            .filter(|(r, &i)| d[i] >= 0.0 && mu[*r] < -1e-9 * mu.amax().max(f64::MIN_POSITIVE))
+            .min_by(|x, y| mu[x.0].total_cmp(&mu[y.0]))
+            .map(|(_, &i)| i);
+        if let Some(i) = pulling {
+            active[i] = false;
+            continue;
+        }
+        // The most violated press left out.
+        let violated = (0..m)
+            .filter(|&i| !active[i])
+            .map(|i| {
+                let moved: f64 = rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &j)| a[(i, j)] * mu[r])
+                    .sum();
+                (i, d[i] - moved)
+            })
+            .filter(|&(_, r)| r > tol)
+            .max_by(|x, y| x.1.total_cmp(&y.1))
+            .map(|(i, _)| i);
+        match violated {
+            Some(i) => active[i] = true,
+            None => break,
+        }
+    }
+    active
+}
+
+/// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
+/// weighted set of vertices: a sliding vertex hold (its normal, weight 1), a full vertex hold
+/// (the three axes), a point hold (its normal, its barycentric weights). With `J` the
+/// constraints' rows and `P = S⁻¹ = W M⁻¹` the filter as applied to impulses (exact or
+/// neighbour), it finds the impulses `λ` with `J (Δv + P Jᵀ λ) = 0` — a small dense system
+/// `J P Jᵀ λ = -J Δv`, the capacitance matrix of the held set — and adds `P Jᵀ λ` to `Δv`. The
+/// rest of the surface then responds to the holds as to pins moving where the holders put them,
+/// and a point hold whose impulse would pull is let go (contact only pushes),
+/// at any `s`, without refactoring the filter: `P`'s columns for the held vertices are the
+/// filter's own rows (neighbour) or one cached solve each (exact).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn constrain(
+    filter: &mut Filter,
+    free: &[u32],
+    free_index: &[u32],
+    held: &[bool],
+    held_normal: &[DVec3],
+    points: &mut [PointHold],
+    vel: &[DVec3],
+    dv: &mut [DVec3],
+) {
+    // The free slots involved, sorted (the neighbour filter's gather searches them).
+    let mut list: Vec<u32> = free
+        .iter()
+        .enumerate()
+        .filter(|(_, &v)| held[v as usize])
+        .map(|(fi, _)| fi as u32)
+        .collect();
+    for p in points.iter() {
+        for (v, _) in p.entries() {
+            let fi = free_index[v as usize];
+            if fi != NOT_FREE {
+                list.push(fi);
+            }
+        }
+    }
+    list.sort_unstable();
+    list.dedup();
+    let h = list.len();
+    if h == 0 {
+        return;
+    }
+    let slot = |fi: u32| list.binary_search(&fi).ok();
+    // Constraints: direction, (slot, weight) entries, and which point hold (if any).
+    type Con = (DVec3, [(usize, f64); 3], usize, Option<usize>);
+    let mut cons: Vec<Con> = Vec::with_capacity(h);
+    for (k, &fi) in list.iter().enumerate() {
+        let v = free[fi as usize] as usize;
+        if !held[v] {
+            continue;
+        }
+        let entry = [(k, 1.0), (0, 0.0), (0, 0.0)];
+        let n = held_normal[v];
+        if n == DVec3::ZERO {
+            cons.extend([DVec3::X, DVec3::Y, DVec3::Z].map(|d| (d, entry, 1, None)));
+        } else {
+            cons.push((n, entry, 1, None));
+        }
+    }
+    for (pi, p) in points.iter().enumerate() {
+        let mut entry = [(0, 0.0); 3];
+        let mut count = 0;
+        for (v, w) in p.entries() {
+            if let Some(k) = slot(free_index[v as usize]) {
+                entry[count] = (k, w);
+                count += 1;
+            }
+        }
+        if count > 0 {
+            cons.push((p.normal, entry, count, Some(pi)));
+        }
+    }
+    // P restricted to the involved vertices (h × h), one column read each.
+    let mut p_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
+    for (b, &fj) in list.iter().enumerate() {
+        filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
+    }
+    let m = cons.len();
+    let mut a_mat = nalgebra::DMatrix::<f64>::zeros(m, m);
+    let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+    for (a, (da, ea, na, point)) in cons.iter().enumerate() {
+        // Vertex holds: no change of the held velocity. Point holds: at least their least
+        // velocity.
+        rhs[a] = match point {
+            None => -ea[..*na]
+                .iter()
+                .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
+                .sum::<f64>(),
+            Some(pi) => {
+                points[*pi].min_velocity
+                    - ea[..*na]
+                        .iter()
+                        .map(|&(k, w)| {
+                            let fi = list[k] as usize;
+                            w * da.dot(vel[free[fi] as usize] + dv[fi])
+                        })
+                        .sum::<f64>()
+            }
+        };
+        for (b, (db, eb, nb, _)) in cons.iter().enumerate() {
+            let dd = da.dot(*db);
+            let mut s = 0.0;
+            for &(ka, wa) in &ea[..*na] {
+                for &(kb, wb) in &eb[..*nb] {
+                    s += wa * wb * p_hh[(ka, kb)];
+                }
+            }
+            a_mat[(a, b)] = dd * s;
+        }
+    }
+    // A point hold on a held vertex, or two on the same points, repeat a constraint: a tiny
+    // diagonal term keeps the system definite (the least-norm impulses).
+    let scale = (0..m).map(|a| a_mat[(a, a)]).fold(0.0, f64::max);
+    for a in 0..m {
+        a_mat[(a, a)] += 1e-12 * scale;
+    }
+    // Point holds only push: one that would pull is dropped and the rest solved again (an
+    // active set; each pass drops at least one, so at most one pass per point hold).
+    let vtol = 1e-9 * (1.0 + rhs.amax());
+    let mut active = vec![true; m];
+    let mut passes = 0;
+    let lambda = loop {
+        let mut a = a_mat.clone();
+        let mut b = rhs.clone();
+        for c in (0..m).filter(|&c| !active[c]) {
+            a.row_mut(c).fill(0.0);
+            a.column_mut(c).fill(0.0);
+            a[(c, c)] = 1.0;
+            b[c] = 0.0;
+        }
+        let lambda = match a.clone().cholesky() {
+            Some(ch) => ch.solve(&b),
+            None => match a.lu().solve(&b) {
+                Some(x) => x,
+                None => return,
+            },
+        };
+        if !lambda.iter().all(|x| x.is_finite()) {
+            return;
+        }
+        // Drop the point holds that would pull; then take back the most violated one left out
+        // (its point would pass its holder).
+        let pulling: Vec<usize> = (0..m)
+            .filter(|&c| active[c] && cons[c].3.is_some() && lambda[c] < 0.0)
+            .collect();
+        if !pulling.is_empty() && passes < 2 * m + 2 {
+            pulling.iter().for_each(|&c| active[c] = false);
+            passes += 1;
+            continue;
+        }
+        let violated = (0..m)
+            .filter(|&c| !active[c])
+            .map(|c| {
+                let got: f64 = (0..m).map(|b| a_mat[(c, b)] * lambda[b]).sum();
+                (c, rhs[c] - got)
+            })
+            .filter(|&(_, r)| r > vtol)
+            .max_by(|x, y| x.1.total_cmp(&y.1))
+            .map(|(c, _)| c);
+        match violated {
+            Some(c) if passes < 2 * m + 2 => {
+                active[c] = true;
+                passes += 1;
+            }
+            _ => break lambda,
+        }
+    };
+    let mut impulse = vec![DVec3::ZERO; h];
+    for (c, (d, e, n, point)) in cons.iter().enumerate() {
+        for &(k, w) in &e[..*n] {
+            impulse[k] += *d * (w * lambda[c]);
+        }
+        if let Some(pi) = point {
+            points[*pi].impulse = lambda[c];
+        }
+    }
+    for (k, &fj) in list.iter().enumerate() {
+        let j = impulse[k];
+        if j != DVec3::ZERO {
+            filter.for_column(fj, |i, w| dv[i as usize] += j * w);
+        }
+    }
+}
