@@ -1397,7 +1397,7 @@ fn fixed_tri(fixed: &TouchMesh, t: u32) -> [DVec3; 3] {
     fixed.indices()[t as usize].map(|v| fixed.vertices()[v as usize].as_dvec3())
 }
 
-fn tri_normal(t: &[DVec3; 3]) -> DVec3 {
+pub(crate) fn tri_normal(t: &[DVec3; 3]) -> DVec3 {
     (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
 }
 

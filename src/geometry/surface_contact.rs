@@ -29,7 +29,7 @@
 //! surface on with the tool's old velocity after the tool slowed down). Flat tool edges (the diagonals of a
 //! triangulated face) are skipped: a face is held through its vertices and its real edges.
 
-use super::reconstruction::{edge_edge, ray_triangle};
+use super::reconstruction::{edge_edge, ray_triangle, tri_normal};
 use super::touch_mesh::{Feature, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use glamx::DVec3;
@@ -110,8 +110,9 @@ const MIN_EDGE_NORMAL_COS: f64 = 0.2;
 /// Smallest sine of the angle between a tool edge and a surface edge for an edge-edge contact.
 const MIN_EDGE_SINE: f64 = 0.1;
 
+/// The unit normal of a triangle, `None` for a degenerate one.
 fn unit_normal(t: &[DVec3; 3]) -> Option<DVec3> {
-    (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()
+    Some(tri_normal(t)).filter(|n| *n != DVec3::ZERO)
 }
 
 /// The contacts of `tool` (moving from `start` to `end`, poses in the surface's frame) with the

@@ -135,10 +135,11 @@ impl MassSpringSurface {
         for p in presses {
             holds.push(self.point_hold(p)?);
         }
-        // The movable share of each vertex: 1/m, zero for pinned and held vertices.
+        // The movable share of each vertex: 1/m, zero for pinned vertices (presses on held
+        // vertices are not kept, below).
         let inv_mass = |s: &Self, v: u32| {
             let v = v as usize;
-            if s.pinned[v] || s.held[v] {
+            if s.pinned[v] {
                 0.0
             } else {
                 1.0 / s.mass[v]
@@ -147,8 +148,8 @@ impl MassSpringSurface {
         let mut out = Vec::with_capacity(presses.len());
         let mut kept: Vec<(PointHold, f64, f64)> = Vec::new();
         for (hold, p) in holds.into_iter().zip(presses) {
-            // The weight on vertices that can move: a point mostly on pinned or held vertices
-            // is carried by them (moving it would fling its free vertex by depth / weight).
+            // The weight on vertices that can move: a point mostly on pinned vertices is
+            // carried by them (moving it would fling its free vertex by depth / weight).
             let movable: f64 = hold
                 .entries()
                 .filter(|&(v, _)| inv_mass(self, v) > 0.0)
@@ -195,30 +196,30 @@ impl MassSpringSurface {
         for i in 0..m {
             a[(i, i)] += 1e-12 * scale;
         }
-        let depth: Vec<f64> = kept.iter().map(|k| k.1).collect();
-        let active = press_active_set(&a, &depth);
+        // Positions: presses with a depth only push; a negative depth (a point carried past
+        // its holder) may pull back.
+        let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
+        let tol = 1e-9 * depth.amax();
+        let Some((mu, active)) = solve_pushing(&a, &depth, |i| depth[i] >= 0.0, tol) else {
+            return Ok(out.iter().map(|_| None).collect());
+        };
+        // Velocities: the pushing presses get their holder's normal velocity.
         let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
         let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
-        let rhs = nalgebra::DMatrix::from_fn(rows.len(), 2, |r, c| {
-            if c == 0 {
-                kept[rows[r]].1
-            } else {
-                kept[rows[r]].2
-            }
-        });
-        let mu = match sub.clone().cholesky() {
-            Some(ch) => Some(ch.solve(&rhs)),
-            None => sub.lu().solve(&rhs),
+        let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
+        let nu = match sub.clone().cholesky() {
+            Some(ch) => Some(ch.solve(&dv)),
+            None => sub.lu().solve(&dv),
         };
-        let Some(mu) = mu.filter(|mu| mu.iter().all(|x| x.is_finite())) else {
+        let Some(nu) = nu.filter(|nu| nu.iter().all(|x| x.is_finite())) else {
             return Ok(out.iter().map(|_| None).collect());
         };
         for (r, &i) in rows.iter().enumerate() {
             let hold = &kept[i].0;
             for (v, w) in hold.entries() {
                 let share = w * inv_mass(self, v);
-                self.pos[v as usize] += hold.normal * (share * mu[(r, 0)]);
-                self.vel[v as usize] += hold.normal * (share * mu[(r, 1)]);
+                self.pos[v as usize] += hold.normal * (share * mu[i]);
+                self.vel[v as usize] += hold.normal * (share * nu[r]);
             }
         }
         // A press the others' pushes already satisfy is left `gap` short of its holder: it is
@@ -227,12 +228,7 @@ impl MassSpringSurface {
             if active[i] {
                 continue;
             }
-            let moved: f64 = rows
-                .iter()
-                .enumerate()
-                .map(|(r, &j)| a[(i, j)] * mu[(r, 0)])
-                .sum();
-            let gap = (moved - k.1).max(0.0);
+            let gap = (a.row(i).dot(&mu.transpose()) - k.1).max(0.0);
             let velocity: f64 =
                 k.0.entries()
                     .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
@@ -293,60 +289,59 @@ impl MassSpringSurface {
     }
 }
 
-/// Which presses push (an active set for `A μ = d`, `A = J M⁻¹ Jᵀ`): a press with `d ≥ 0` may
-/// only push (`μ ≥ 0`); one with `d < 0` (a point carried past its holder) may pull back; a
-/// press left out must end satisfied (`d - (A μ) ≤ 0`: the others' pushes moved it far
-/// enough). Each pass drops the most pulling press or adds the most violated one; bounded.
-fn press_active_set(a: &nalgebra::DMatrix<f64>, d: &[f64]) -> Vec<bool> {
-    let m = d.len();
+/// Solves `A x = b` for contact rows that push (an active set, Lawson-Hanson style): a row
+/// with `push_only(i)` must end with `xᵢ ≥ 0`, the others may have any sign; a row left out has
+/// `xᵢ = 0` and must end satisfied, `bᵢ - (A x)ᵢ ≤ tol` (the other rows' pushes did its work).
+/// Each pass drops the most pulling push-only row or takes back the most violated row left out;
+/// at most `2m + 2` passes. Returns `x` (zero on the rows left out) and which rows are in, or
+/// `None` when a solve fails or is not finite. Shared by the presses' position projection and
+/// the filtered step's impulses.
+fn solve_pushing(
+    a: &nalgebra::DMatrix<f64>,
+    b: &nalgebra::DVector<f64>,
+    push_only: impl Fn(usize) -> bool,
+    tol: f64,
+) -> Option<(nalgebra::DVector<f64>, Vec<bool>)> {
+    let m = b.len();
     let mut active = vec![true; m];
-    let scale = d
-        .iter()
-        .fold(0.0, |s: f64, x| s.max(x.abs()))
-        .max(f64::MIN_POSITIVE);
-    let tol = 1e-9 * scale;
+    let mut x = nalgebra::DVector::<f64>::zeros(m);
     for _ in 0..2 * m + 2 {
         let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
         let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
-        let rhs = nalgebra::DVector::from_fn(rows.len(), |r, _| d[rows[r]]);
-        let mu = match sub.clone().cholesky() {
+        let rhs = nalgebra::DVector::from_fn(rows.len(), |r, _| b[rows[r]]);
+        let sol = match sub.clone().cholesky() {
             Some(ch) => ch.solve(&rhs),
-            None => match sub.lu().solve(&rhs) {
-                Some(x) => x,
-                None => return active,
-            },
+            None => sub.lu().solve(&rhs)?,
         };
-        // The most pulling press that may not pull.
+        if !sol.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        x.fill(0.0);
+        for (r, &i) in rows.iter().enumerate() {
+            x[i] = sol[r];
+        }
+        let floor = -1e-9 * x.amax();
         let pulling = rows
             .iter()
-            .enumerate()
-            .filter(|(r, &i)| d[i] >= 0.0 && mu[*r] < -1e-9 * mu.amax().max(f64::MIN_POSITIVE))
-            .min_by(|x, y| mu[x.0].total_cmp(&mu[y.0]))
-            .map(|(_, &i)| i);
+            .copied()
+            .filter(|&i| push_only(i) && x[i] < floor)
+            .min_by(|&i, &j| x[i].total_cmp(&x[j]));
         if let Some(i) = pulling {
             active[i] = false;
             continue;
         }
-        // The most violated press left out.
         let violated = (0..m)
             .filter(|&i| !active[i])
-            .map(|i| {
-                let moved: f64 = rows
-                    .iter()
-                    .enumerate()
-                    .map(|(r, &j)| a[(i, j)] * mu[r])
-                    .sum();
-                (i, d[i] - moved)
-            })
+            .map(|i| (i, b[i] - a.row(i).dot(&x.transpose())))
             .filter(|&(_, r)| r > tol)
-            .max_by(|x, y| x.1.total_cmp(&y.1))
+            .max_by(|p, q| p.1.total_cmp(&q.1))
             .map(|(i, _)| i);
         match violated {
             Some(i) => active[i] = true,
             None => break,
         }
     }
-    active
+    Some((x, active))
 }
 
 /// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
@@ -465,56 +460,11 @@ pub(super) fn constrain(
     for a in 0..m {
         a_mat[(a, a)] += 1e-12 * scale;
     }
-    // Point holds only push: one that would pull is dropped and the rest solved again (an
-    // active set; each pass drops at least one, so at most one pass per point hold).
-    let vtol = 1e-9 * (1.0 + rhs.amax());
-    let mut active = vec![true; m];
-    let mut passes = 0;
-    let lambda = loop {
-        let mut a = a_mat.clone();
-        let mut b = rhs.clone();
-        for c in (0..m).filter(|&c| !active[c]) {
-            a.row_mut(c).fill(0.0);
-            a.column_mut(c).fill(0.0);
-            a[(c, c)] = 1.0;
-            b[c] = 0.0;
-        }
-        let lambda = match a.clone().cholesky() {
-            Some(ch) => ch.solve(&b),
-            None => match a.lu().solve(&b) {
-                Some(x) => x,
-                None => return,
-            },
-        };
-        if !lambda.iter().all(|x| x.is_finite()) {
-            return;
-        }
-        // Drop the point holds that would pull; then take back the most violated one left out
-        // (its point would pass its holder).
-        let pulling: Vec<usize> = (0..m)
-            .filter(|&c| active[c] && cons[c].3.is_some() && lambda[c] < 0.0)
-            .collect();
-        if !pulling.is_empty() && passes < 2 * m + 2 {
-            pulling.iter().for_each(|&c| active[c] = false);
-            passes += 1;
-            continue;
-        }
-        let violated = (0..m)
-            .filter(|&c| !active[c])
-            .map(|c| {
-                let got: f64 = (0..m).map(|b| a_mat[(c, b)] * lambda[b]).sum();
-                (c, rhs[c] - got)
-            })
-            .filter(|&(_, r)| r > vtol)
-            .max_by(|x, y| x.1.total_cmp(&y.1))
-            .map(|(c, _)| c);
-        match violated {
-            Some(c) if passes < 2 * m + 2 => {
-                active[c] = true;
-                passes += 1;
-            }
-            _ => break lambda,
-        }
+    // Point holds only push (one that would pull is let go) and a point left out must not pass
+    // its holder; vertex holds are bilateral.
+    let tol = 1e-9 * (1.0 + rhs.amax());
+    let Some((lambda, _)) = solve_pushing(&a_mat, &rhs, |c| cons[c].3.is_some(), tol) else {
+        return;
     };
     let mut impulse = vec![DVec3::ZERO; h];
     for (c, (d, e, n, point)) in cons.iter().enumerate() {
