@@ -71,7 +71,7 @@ fn scene(side: u32, tools: usize, substeps: u32, dt: f32) -> Scene {
         let start = tool_pose(k, tools, *c, 0.0).translation + Vector::Y * 0.05;
         let b = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(start));
         let h = world.insert_collider(ColliderBuilder::ball(R), Some(b));
-        set.add_tool(h, &mut world);
+        set.add_tool(h, &mut world).unwrap();
         handles.push((h, b, *c));
     }
     // Press the tools in through real rapier steps.

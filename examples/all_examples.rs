@@ -767,7 +767,7 @@ impl SoftDemo {
             ColliderBuilder::ball(radius),
             Pose::from_translation(tool_at),
         );
-        set.add_tool(tool.collider, &mut world);
+        set.add_tool(tool.collider, &mut world).unwrap();
         viewer.set_world(&mut world);
         viewer.set_initial_collider_color(collider, TISSUE);
         tool.colors(viewer);

@@ -30,7 +30,7 @@ fn main() {
         RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.05, 0.05, 0.0)),
     );
     let tool = world.insert_collider(ColliderBuilder::ball(0.03), Some(tool_body));
-    set.add_tool(tool, &mut world);
+    set.add_tool(tool, &mut world).unwrap();
     println!(
         "plate: {} nodes, neighbour filter, s max {:.3}, surface dt {:.3} ms",
         set.get(h).unwrap().surface.num_vertices(),

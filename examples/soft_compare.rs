@@ -328,7 +328,7 @@ fn run_touch(p: &Plate, cfg: Config) -> Row {
     let sites = tool_sites(cfg.tools);
     let tools = insert_tools(&mut world, &sites, 0.0);
     for t in &tools {
-        set.add_tool(*t, &mut world);
+        set.add_tool(*t, &mut world).unwrap();
     }
     let mut track = Tracker::new(cfg);
     let mut forces = Vec::with_capacity(tools.len());

@@ -30,6 +30,12 @@ pub enum CouplingError {
     /// The surface rejected its new time step.
     #[error(transparent)]
     Surface(#[from] SurfaceError),
+    /// The tool's collider is not in the world.
+    #[error("the tool's collider is not in the world")]
+    NoSuchCollider,
+    /// The tool's shape has no size (its bounding box has no extent), so it could hold nothing.
+    #[error("the tool's shape has no size")]
+    ZeroSizeTool,
     /// parry rejected the surface's triangle mesh.
     #[error("the surface mesh cannot be a collider: {0}")]
     Collider(String),
@@ -228,7 +234,7 @@ struct ToolState {
 /// let start = Vector::new(0.0, 0.1, 0.0);
 /// let ball = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(start));
 /// let tool = world.insert_collider(ColliderBuilder::ball(0.05), Some(ball));
-/// set.add_tool(tool, &mut world);
+/// set.add_tool(tool, &mut world).unwrap();
 /// for step in 1..=60 {
 ///     // Down 7 cm in 20 steps, then held: the ball's lowest point ends at y = -0.02.
 ///     let y = (0.1 - 0.0035 * step as f32).max(0.03);
@@ -398,22 +404,36 @@ impl SurfaceSet {
     ///   user force and torque (a dynamic body).
     ///
     /// Adding a tool twice changes nothing more.
-    pub fn add_tool(&mut self, tool: ColliderHandle, world: &mut PhysicsWorld) {
+    ///
+    /// # Errors
+    /// [`CouplingError::NoSuchCollider`] when `tool` is not in the world;
+    /// [`CouplingError::ZeroSizeTool`] for a shape of no size (a ball of radius zero, a cuboid
+    /// of zero half-extents: its bounding box has no extent, or a non-finite one), which could
+    /// hold nothing. Nothing changes then.
+    pub fn add_tool(
+        &mut self,
+        tool: ColliderHandle,
+        world: &mut PhysicsWorld,
+    ) -> Result<(), CouplingError> {
         if self.tools.contains_key(&tool) {
-            return;
+            return Ok(());
         }
-        let mut had_surface_group = false;
-        let mut mesh = None;
-        if let Some(c) = world.colliders.get_mut(tool) {
-            mesh = polyhedral_mesh(c.shape());
-            let g = c.solver_groups();
-            had_surface_group = g.filter.contains(SURFACE_SOLVER_GROUP);
-            c.set_solver_groups(InteractionGroups::new(
-                g.memberships,
-                g.filter & !SURFACE_SOLVER_GROUP,
-                g.test_mode,
-            ));
+        let c = world
+            .colliders
+            .get_mut(tool)
+            .ok_or(CouplingError::NoSuchCollider)?;
+        let extent = c.shape().compute_local_aabb().extents().max_element();
+        if !(extent > 0.0 && extent.is_finite()) {
+            return Err(CouplingError::ZeroSizeTool);
         }
+        let mesh = polyhedral_mesh(c.shape());
+        let g = c.solver_groups();
+        let had_surface_group = g.filter.contains(SURFACE_SOLVER_GROUP);
+        c.set_solver_groups(InteractionGroups::new(
+            g.memberships,
+            g.filter & !SURFACE_SOLVER_GROUP,
+            g.test_mode,
+        ));
         self.tools.insert(
             tool,
             ToolState {
@@ -425,6 +445,7 @@ impl SurfaceSet {
                 mesh,
             },
         );
+        Ok(())
     }
 
     /// Stops treating `tool` as a tool: the vertices it held are released, the force and
@@ -478,7 +499,7 @@ impl SurfaceSet {
     ///     RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(0.0, 0.1, 0.0)),
     /// );
     /// let tool = world.insert_collider(ColliderBuilder::ball(0.05), Some(ball));
-    /// set.add_tool(tool, &mut world);
+    /// set.add_tool(tool, &mut world).unwrap();
     /// // Down through the plate's plane for half a second, then back up.
     /// world.bodies[ball].set_linvel(Vector::new(0.0, -0.15, 0.0), true);
     /// for _ in 0..30 {

@@ -114,7 +114,8 @@ impl BallOnPlateScene {
             ColliderBuilder::ball(Self::RADIUS).density(Self::BALL_MASS / volume),
             Some(ball),
         );
-        set.add_tool(ball_collider, &mut world);
+        set.add_tool(ball_collider, &mut world)
+            .expect("a ball of positive radius is a tool");
         BallOnPlateScene {
             world,
             set,

@@ -400,7 +400,10 @@ impl MultiToolScene {
                     .rotation(spec.tilt),
             );
             let c = scene.world.insert_collider(spec.shape.collider(), Some(b));
-            scene.set.add_tool(c, &mut scene.world);
+            scene
+                .set
+                .add_tool(c, &mut scene.world)
+                .expect("the scene's tools have a size");
             scene.tools[k].body = b;
             scene.tools[k].collider = c;
         }

@@ -53,6 +53,10 @@ pub enum SurfaceError {
     /// The named edge is not an edge of the mesh.
     #[error("({0}, {1}) is not an edge of the mesh")]
     NotAnEdge(u32, u32),
+    /// A force profile's start, end or ramp duration is NaN or infinite, its duration is
+    /// negative or its end comes before its start.
+    #[error("a force profile's times must be finite, its duration >= 0 and its end >= its start")]
+    InvalidForceProfile,
     /// A point hold ([`MassSpringSurface::press_point`]) has no vertex or more than three, a
     /// negative or non-finite weight, weights summing to zero, a zero or non-finite normal, or
     /// a non-finite depth or velocity.
@@ -157,6 +161,31 @@ impl ForceProfile {
     /// ```
     pub fn force_at(&self, t: Real) -> Vector {
         self.at(t as f64).as_vec3()
+    }
+
+    /// Finite force and times, a duration ≥ 0, an end not before the start.
+    fn check(&self) -> Result<(), SurfaceError> {
+        let (force, times_ok) = match *self {
+            ForceProfile::Step { force, start, end } => (
+                force,
+                start.is_finite() && end.is_none_or(|e| e.is_finite() && e >= start),
+            ),
+            ForceProfile::Ramp {
+                force,
+                start,
+                duration,
+            } => (
+                force,
+                start.is_finite() && duration.is_finite() && duration >= 0.0,
+            ),
+        };
+        if !force.is_finite() {
+            return Err(SurfaceError::NonFiniteForce);
+        }
+        if !times_ok {
+            return Err(SurfaceError::InvalidForceProfile);
+        }
+        Ok(())
     }
 
     fn at(&self, t: f64) -> DVec3 {
@@ -478,6 +507,7 @@ impl MassSpringSurfaceBuilder {
             free_index: Vec::new(),
             filter: None,
             fallback: false,
+            fallback_logged: false,
             force: vec![DVec3::ZERO; n],
             disp: Vec::with_capacity(n),
             rhs: Vec::new(),
@@ -569,6 +599,8 @@ pub struct MassSpringSurface {
     free_index: Vec<u32>,
     filter: Option<Filter>,
     fallback: bool,
+    /// The fallback was reported through `log` (once per surface).
+    fallback_logged: bool,
     force: Vec<DVec3>,
     disp: Vec<[DVec3; 2]>,
     rhs: Vec<DVec3>,
@@ -665,6 +697,20 @@ impl MassSpringSurface {
             if bound > self.neighbour_max_error {
                 kind = FilterKind::Exact;
                 self.fallback = true;
+                if !self.fallback_logged {
+                    self.fallback_logged = true;
+                    log::warn!(
+                        "rapier_touch: the neighbour filter's error bound {bound:.3} exceeds \
+                         {:.3} on this {}-vertex surface (largest s = {:.3}); using the exact \
+                         filter (MassSpringSurface::filter_fallback)",
+                        self.neighbour_max_error,
+                        self.home.len(),
+                        self.system()
+                            .s_values(self.dt)
+                            .into_iter()
+                            .fold(0.0, f64::max)
+                    );
+                }
             }
         }
         if self.filter.as_ref().map(|f| f.kind()) != Some(kind) {
@@ -737,7 +783,8 @@ impl MassSpringSurface {
         self.integrator
     }
     /// `true` when the neighbour filter was asked for but its error bound exceeded the limit,
-    /// so the exact filter runs instead.
+    /// so the exact filter runs instead. The first fallback of a surface is also reported as a
+    /// `log` warning (the application's logger decides where it goes).
     pub fn filter_fallback(&self) -> bool {
         self.fallback
     }
@@ -837,7 +884,8 @@ impl MassSpringSurface {
     /// [`MassSpringSurface::remove_force_schedule`].
     ///
     /// # Errors
-    /// [`SurfaceError::VertexOutOfRange`], [`SurfaceError::NonFiniteForce`].
+    /// [`SurfaceError::VertexOutOfRange`], [`SurfaceError::NonFiniteForce`],
+    /// [`SurfaceError::InvalidForceProfile`].
     pub fn add_force_schedule(
         &mut self,
         vertices: Vec<u32>,
@@ -846,9 +894,7 @@ impl MassSpringSurface {
         for &v in &vertices {
             self.check_vertex(v)?;
         }
-        if !profile.at(f64::MAX / 2.0).is_finite() {
-            return Err(SurfaceError::NonFiniteForce);
-        }
+        profile.check()?;
         self.schedules.push((vertices, profile));
         Ok(self.schedules.len() - 1)
     }

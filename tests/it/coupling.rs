@@ -85,7 +85,7 @@ fn add_ball_tool(
 ) -> (RigidBodyHandle, ColliderHandle) {
     let b = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(at));
     let c = world.insert_collider(ColliderBuilder::ball(r), Some(b));
-    set.add_tool(c, world);
+    set.add_tool(c, world).unwrap();
     (b, c)
 }
 
@@ -240,7 +240,7 @@ fn dynamic_ball_comes_to_rest_on_a_soft_plate() {
     let ball =
         world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.5, 0.4, 0.5)));
     let c = world.insert_collider(ColliderBuilder::ball(r).density(100.0), Some(ball));
-    set.add_tool(c, &mut world);
+    set.add_tool(c, &mut world).unwrap();
     let weight = world.bodies[ball].mass() * 9.81;
     let mut lowest = f32::MAX;
     let (mut support, mut ys) = (0.0f32, Vec::new());
@@ -281,8 +281,8 @@ fn removing_a_tool_gives_back_its_force_and_solver_groups() {
     let c = world.insert_collider(ColliderBuilder::ball(0.06).density(100.0), Some(ball));
     let groups = world.colliders[c].solver_groups();
     assert!(groups.filter.contains(SURFACE_SOLVER_GROUP));
-    set.add_tool(c, &mut world);
-    set.add_tool(c, &mut world); // twice: no further change
+    set.add_tool(c, &mut world).unwrap();
+    set.add_tool(c, &mut world).unwrap(); // twice: no further change
     assert!(!world.colliders[c]
         .solver_groups()
         .filter
@@ -440,7 +440,7 @@ fn capsule_and_cylinder_tools_get_steady_normal_forces() {
         let top = c + Vector::Y * (bottom + 0.05);
         let b = world.insert_body(RigidBodyBuilder::kinematic_position_based().translation(top));
         let tool = world.insert_collider(shape, Some(b));
-        set.add_tool(tool, &mut world);
+        set.add_tool(tool, &mut world).unwrap();
         let end = c + Vector::Y * (bottom - depth);
         press(&mut world, &mut set, &[(b, top, end)], 30, 240);
         let f0 = set.tool_reaction(tool).unwrap();
@@ -474,17 +474,29 @@ fn bad_tool_input_is_refused_or_harmless() {
     assert!(set.haptic_step(&world, tool, nan).is_none());
     let other = world.insert_collider(ColliderBuilder::ball(0.1), None);
     assert!(set.haptic_step(&world, other, Pose::IDENTITY).is_none());
-    // A degenerate (zero-radius) tool pressed through the plate: finite forces, finite surface.
-    let (b0, t0) = add_ball_tool(&mut world, &mut set, c + Vector::Y * 0.1, 0.0);
-    press(
-        &mut world,
-        &mut set,
-        &[(b0, c + Vector::Y * 0.1, c - Vector::Y * 0.05)],
-        20,
-        20,
+    // A tool of no size (a zero-radius ball, a zero cuboid) or not in the world is refused,
+    // and its solver groups stay as they were.
+    for shape in [
+        ColliderBuilder::ball(0.0),
+        ColliderBuilder::cuboid(0.0, 0.0, 0.0),
+    ] {
+        let b0 = world.insert_body(RigidBodyBuilder::kinematic_position_based());
+        let t0 = world.insert_collider(shape, Some(b0));
+        let groups = world.colliders[t0].solver_groups();
+        assert_eq!(
+            set.add_tool(t0, &mut world),
+            Err(CouplingError::ZeroSizeTool)
+        );
+        assert_eq!(world.colliders[t0].solver_groups(), groups);
+        assert!(set.tool_reaction(t0).is_none());
+    }
+    let gone = world.insert_collider(ColliderBuilder::ball(0.1), None);
+    world.remove_collider(gone);
+    assert_eq!(
+        set.add_tool(gone, &mut world),
+        Err(CouplingError::NoSuchCollider)
     );
-    let r = set.tool_reaction(t0).unwrap();
-    assert!(r.force.is_finite() && r.torque.is_finite());
+    set.step(&mut world);
     assert!(set.get(h).unwrap().surface.is_finite());
     // A sliding hold with a zero or NaN normal is a full hold; a bad vertex is an error.
     let s = &mut set.get_mut(h).unwrap().surface;
@@ -514,8 +526,8 @@ fn touch_events_follow_the_held_vertices() {
     let (a, b) = (ball(&mut world, 0.3), ball(&mut world, 0.7));
     let tool = |world: &PhysicsWorld, body: RigidBodyHandle| world.bodies[body].colliders()[0];
     let (ta, tb) = (tool(&world, a), tool(&world, b));
-    set.add_tool(ta, &mut world);
-    set.add_tool(tb, &mut world);
+    set.add_tool(ta, &mut world).unwrap();
+    set.add_tool(tb, &mut world).unwrap();
     let mut was = [false, false];
     let mut seen: Vec<ToolTouchEvent> = Vec::new();
     for step in 0..240 {

@@ -191,7 +191,7 @@ fn press_tool(plate: &Plate, tool: &Tool, at: (f32, f32), depth: f32) -> (Vector
         )),
     );
     let c = world.insert_collider(ColliderBuilder::new((tool.shape)(k)), Some(b));
-    set.add_tool(c, &mut world);
+    set.add_tool(c, &mut world).unwrap();
     for step in 0..270 {
         let a = ((step + 1) as f32 / 30.0).min(1.0);
         world.bodies[b].set_next_kinematic_translation(in_world(above.lerp(below, a)));

@@ -608,3 +608,125 @@ fn bad_point_presses_are_errors() {
     assert!((mid - mid0 - down * 0.01).length() < 1e-6);
     assert!((s.position(1) - s.position(2) - (before[1] - before[2])).length() < 1e-6);
 }
+
+/// Messages the crate logs, kept by a logger installed once for the test binary.
+fn logged() -> &'static std::sync::Mutex<Vec<String>> {
+    struct Keep;
+    static LINES: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    impl log::Log for Keep {
+        fn enabled(&self, _: &log::Metadata) -> bool {
+            true
+        }
+        fn log(&self, record: &log::Record) {
+            if let Ok(mut lines) = LINES.lock() {
+                lines.push(format!("{}: {}", record.level(), record.args()));
+            }
+        }
+        fn flush(&self) {}
+    }
+    static KEEP: Keep = Keep;
+    if log::set_logger(&KEEP).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
+    &LINES
+}
+
+/// The neighbour filter's fallback is a `log` warning, once per surface however often the
+/// filter is rebuilt; a surface that does not fall back logs nothing.
+#[test]
+fn the_filter_fallback_is_logged_once_per_surface() {
+    let lines = logged();
+    // A 7 x 5 grid (48 vertices): a size no other test logs about.
+    let (v, t) = grid(7, 5, 1.0);
+    let mut s = MassSpringSurfaceBuilder::new(v.clone(), t.clone())
+        .stiffness(1e4)
+        .mass(MassDistribution::PerVertex(1e-3))
+        .integrator(Integrator::NEIGHBOUR)
+        .build()
+        .unwrap();
+    assert!(s.filter_fallback());
+    s.set_dt(1.0 / 30.0).unwrap();
+    s.set_spring(2e4, 1.0).unwrap();
+    assert!(s.filter_fallback());
+    let ours = |lines: &[String]| {
+        lines
+            .iter()
+            .filter(|l| l.starts_with("WARN") && l.contains(" 48-vertex surface"))
+            .count()
+    };
+    assert_eq!(
+        ours(&lines.lock().unwrap()),
+        1,
+        "{:?}",
+        lines.lock().unwrap()
+    );
+    // A second surface falling back logs once more; a soft one not at all.
+    let other = MassSpringSurfaceBuilder::new(v.clone(), t.clone())
+        .stiffness(1e4)
+        .mass(MassDistribution::PerVertex(1e-3))
+        .integrator(Integrator::NEIGHBOUR)
+        .build()
+        .unwrap();
+    assert!(other.filter_fallback());
+    let soft = MassSpringSurfaceBuilder::new(v, t)
+        .stiffness(1.0)
+        .damping(0.0)
+        .dt(0.01)
+        .integrator(Integrator::NEIGHBOUR)
+        .build()
+        .unwrap();
+    assert!(!soft.filter_fallback());
+    assert_eq!(ours(&lines.lock().unwrap()), 2);
+}
+
+/// Force schedules with NaN or infinite times, a negative ramp duration or an end before the
+/// start are errors, and nothing is scheduled.
+#[test]
+fn bad_force_profiles_are_errors() {
+    let (v, t) = grid(2, 2, 1.0);
+    let mut s = MassSpringSurfaceBuilder::new(v, t).build().unwrap();
+    let f = Vector::Y;
+    let ramp = |start: f32, duration: f32| ForceProfile::Ramp {
+        force: f,
+        start,
+        duration,
+    };
+    let step = |start: f32, end: Option<f32>| ForceProfile::Step {
+        force: f,
+        start,
+        end,
+    };
+    for p in [
+        ramp(f32::NAN, 1.0),
+        ramp(f32::INFINITY, 1.0),
+        ramp(0.0, f32::NAN),
+        ramp(0.0, f32::INFINITY),
+        ramp(0.0, -1.0),
+        step(f32::NAN, None),
+        step(f32::NEG_INFINITY, None),
+        step(0.0, Some(f32::NAN)),
+        step(1.0, Some(0.5)),
+    ] {
+        assert_eq!(
+            s.add_force_schedule(vec![1], p),
+            Err(SurfaceError::InvalidForceProfile),
+            "{p:?}"
+        );
+    }
+    let nan_force = ForceProfile::Step {
+        force: Vector::new(f32::NAN, 0.0, 0.0),
+        start: 0.0,
+        end: None,
+    };
+    assert_eq!(
+        s.add_force_schedule(vec![1], nan_force),
+        Err(SurfaceError::NonFiniteForce)
+    );
+    // Nothing was scheduled: the surface stays at rest.
+    for _ in 0..10 {
+        s.step();
+    }
+    assert_eq!(s.max_displacement(), 0.0);
+    // A zero-length ramp is a step, and is accepted.
+    assert!(s.add_force_schedule(vec![1], ramp(0.0, 0.0)).is_ok());
+}
