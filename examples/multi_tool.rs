@@ -21,7 +21,7 @@
 //! a tool moves at most about 0.15 mm per substep (3 % of the edge length), so a vertex a tool
 //! meets is walked back to the tool's boundary over a short, well-resolved motion. The exact
 //! filter: here the immediate-neighbour filter's error bound is 0.64 (s up to 3.9), far above
-//! its 5 % limit, so it would fall back to the exact filter anyway. About 1.4 s for the run
+//! its 5 % limit, so it would fall back to the exact filter anyway. About 1.1 s for the run
 //! (0.6 s before the sled's vertices and edges pressed the organ between its vertices: the
 //! contact search scans the organ's triangles once per substep for the sled).
 //!
@@ -54,13 +54,13 @@
 //! out of the surface (positive dot product with the home normal under it); the largest
 //! displacement stays between 0.8 and 1.5 times the press depth (dents, no ploughing); a
 //! dragged ball is held back by less than 10 % of its normal force (measured 1.6 to 5.4 %;
-//! the sled's tilted bottom, 16 %; 36 % before its edges pressed between vertices); no vertex is inside a tool by more than 1 µm and every held
+//! the sled's tilted bottom, 15 %; 36 % before its edges pressed between vertices); no vertex is inside a tool by more than 1 µm and every held
 //! vertex lies on a tool's boundary within 1 µm (measured: 4 nm); straight above every tool's
 //! centre there is no surface, and straight below it the deformed surface is no nearer than
 //! the tool's own boundary less 1.5 mm (the flat triangles between held vertices cut into a
 //! ball by up to L²/8r for an edge L: measured 0.96 mm, under the 9 mm ball on the flank); at
 //! the quasi-static steps the tools' forces and the pins' reaction balance within 10 % (measured
-//! 3.9 %; 7.3 % before the sled's vertices and edges pressed between the organ's vertices); 2 s after the last
+//! 4.4 %; 7.3 % before the sled's vertices and edges pressed between the organ's vertices); 2 s after the last
 //! lift-off the organ is home within 0.01 mm.
 //!
 //! Run with `cargo run --release --example multi_tool`.

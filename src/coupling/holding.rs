@@ -5,7 +5,7 @@
 
 use super::pressing::{find_contacts, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
-use crate::geometry::TouchMesh;
+use super::tool_shape::ToolShape;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -34,14 +34,14 @@ pub(super) fn attached_with_pose<'a>(
 }
 
 /// A tool over one substep: its collider, its poses (world) at the start and the end, and its
-/// touch mesh when its shape is polyhedral (its vertices and edges then press the surface
+/// shape as the coupling uses it (its polyhedral parts' vertices and edges press the surface
 /// between the surface's vertices, [`super::pressing`]).
 #[derive(Clone, Debug)]
 pub(super) struct ToolMotion {
     pub handle: ColliderHandle,
     pub start: Pose,
     pub end: Pose,
-    pub mesh: Option<Arc<TouchMesh>>,
+    pub shape: Arc<ToolShape>,
 }
 
 /// One surface substep: the surface steps, then each tool holds the vertices it contains, then
@@ -82,7 +82,7 @@ pub(super) fn surface_substep(
         let (force, arm_sum, held) = hold_vertices(
             follow,
             &mut s.surface,
-            tool.shape(),
+            t.shape.query.as_deref().unwrap_or(tool.shape()),
             &(inv * t.end),
             &(inv * t.start),
             h,
@@ -113,36 +113,32 @@ pub(super) fn surface_substep(
         ));
     }
     // Sharp features, against the surface as the vertex holds left it, pressed together.
-    if tools.iter().any(|t| t.mesh.is_some()) {
+    if tools.iter().any(|t| !t.shape.parts.is_empty()) {
         s.surface.positions_into(&mut s.scratch);
         s.contacts.clear();
         let (mut velocities, mut owners) = (Vec::new(), Vec::new());
         for t in tools {
-            let Some(mesh) = &t.mesh else {
-                continue;
-            };
-            find_contacts(
-                s.surface.triangles(),
-                mesh,
-                &(inv * t.start),
-                &(inv * t.end),
-                h,
-                &s.before,
-                &s.scratch,
-                t.handle,
-                &s.last_pressed,
-                &mut s.candidates,
-                &mut s.contacts,
-                &mut velocities,
-            );
-            owners.resize(s.contacts.len(), t.handle);
+            for (local, mesh) in &t.shape.parts {
+                find_contacts(
+                    s.surface.triangles(),
+                    mesh,
+                    &(inv * t.start * *local),
+                    &(inv * t.end * *local),
+                    h,
+                    &s.before,
+                    &s.scratch,
+                    &mut s.candidates,
+                    &mut s.contacts,
+                    &mut velocities,
+                );
+                owners.resize(s.contacts.len(), t.handle);
+            }
         }
         press_all(
             &mut s.surface,
             &s.contacts,
             &velocities,
             &owners,
-            h,
             &mut s.pressed,
         );
     }
@@ -263,9 +259,10 @@ pub(super) fn hold_vertices(
     (force, moment, count)
 }
 
-/// The outward normal of a convex `shape` at `local`, a point on its boundary (shape frame).
+/// The outward normal of `shape` at `local`, a point on its boundary (shape frame).
 ///
-/// A convex polyhedron gives the normal of its nearest face plane. Any other shape: a short ray
+/// A convex polyhedron gives the normal of its nearest face plane; a compound, its nearest
+/// part's normal; an oriented triangle mesh, its nearest feature's (pseudo-)normal. Any other shape: a short ray
 /// cast from just outside the point, back toward the shape's centre, hits the boundary next to
 /// the point and returns the exact normal there (parry's feature normals at a boundary point
 /// are unreliable for cylinders and cones, and missing for capsules and round shapes).
@@ -280,6 +277,31 @@ pub(super) fn outward_normal(
         .and_then(|poly| closest_face(poly, local))
     {
         return n;
+    }
+    // A compound: the normal of the part whose boundary is nearest.
+    if let Some(compound) = shape.as_compound() {
+        let nearest = compound.shapes().iter().min_by(|a, b| {
+            let d = |(pose, part): &(Pose, parry3d::shape::SharedShape)| {
+                (part.project_point(pose, local, false).point - local).length()
+            };
+            d(a).total_cmp(&d(b))
+        });
+        if let Some((pose, part)) = nearest {
+            let inner = outward_normal(part.as_ref(), pose.inverse_transform_point(local), margin);
+            return pose.rotation * inner;
+        }
+    }
+    // A triangle mesh (oriented: the tool's query shape): the normal of the nearest feature,
+    // a pseudo-normal on an edge or a vertex.
+    if shape.as_trimesh().is_some() {
+        let (proj, feature) = shape.project_local_point_and_get_feature(local);
+        if let Some(n) = shape
+            .feature_normal_at_point(0, feature, proj.point)
+            .filter(|n| n.is_finite())
+            .and_then(|n| n.try_normalize())
+        {
+            return n;
+        }
     }
     let aabb = shape.compute_local_aabb();
     let centre = aabb.center();

@@ -6,6 +6,7 @@ mod events;
 mod holding;
 mod pressing;
 mod surface_set;
+mod tool_shape;
 
 pub use events::ToolTouchEvent;
 

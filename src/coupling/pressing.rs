@@ -6,7 +6,7 @@
 //! the filter's constraint solve. The tool gets the impulses those holds gave in the next
 //! surface step.
 
-use crate::geometry::{tool_surface_contacts, Feature, SurfaceContact, SurfaceSnapshot, TouchMesh};
+use crate::geometry::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, PointPress};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -21,9 +21,6 @@ pub(super) struct Pressed {
     /// Unit direction from the tool into the surface.
     pub normal: Vector,
     pub point: Vector,
-    pub feature: Feature,
-    /// How far the tool's feature moved along the normal in its substep (m).
-    pub travel: Real,
     /// The impulse the hold gave in the surface step after it (N·s, along `normal`), filled in
     /// by [`record_impulses`].
     pub impulse: Real,
@@ -62,9 +59,7 @@ pub(super) fn reaction_of(
 
 /// Finds the contacts of `mesh` (moving from `start` to `end`, surface frame) with the surface
 /// (`before`: positions at the start of the substep, `now`: at its end) and appends them to
-/// `contacts`, with the tool's velocity along each contact's normal in `velocities`. A feature
-/// that pushed in the last substep (`last`, of tool `tool`) stays in contact up to the gap its
-/// hold's velocity can have opened (its travel then and now) above the surface.
+/// `contacts`, with the tool's velocity along each contact's normal in `velocities`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn find_contacts(
     triangles: &[[u32; 3]],
@@ -74,8 +69,6 @@ pub(super) fn find_contacts(
     h: Real,
     before: &[Vector],
     now: &[Vector],
-    tool: ColliderHandle,
-    last: &[Pressed],
     candidates: &mut Vec<u32>,
     contacts: &mut Vec<SurfaceContact>,
     velocities: &mut Vec<Real>,
@@ -93,25 +86,7 @@ pub(super) fn find_contacts(
         return;
     }
     let first = contacts.len();
-    let step = |f: Feature| {
-        let local = match f {
-            Feature::Vertex(v) => mesh.vertices().get(v as usize).copied(),
-            Feature::Edge([a, _]) => mesh.vertices().get(a as usize).copied(),
-            _ => None,
-        };
-        local.map_or(0.0, |p| {
-            (end.transform_point(p) - start.transform_point(p)).length()
-        })
-    };
-    let gap = |f: Feature| {
-        last.iter()
-            .filter(|p| p.tool == tool && p.feature == f && p.impulse > 0.0)
-            .map(|p| p.travel + step(f))
-            .fold(0.0, Real::max)
-    };
-    tool_surface_contacts(
-        &snapshot, candidates, mesh, start, end, margin, &gap, contacts,
-    );
+    tool_surface_contacts(&snapshot, candidates, mesh, start, end, margin, contacts);
     for c in &contacts[first..] {
         // The tool's material point under the contact: its velocity along the normal.
         let material = end.inverse_transform_point(c.point);
@@ -130,7 +105,6 @@ pub(super) fn press_all(
     contacts: &[SurfaceContact],
     velocities: &[Real],
     owners: &[ColliderHandle],
-    h: Real,
     pressed: &mut Vec<Pressed>,
 ) {
     let presses: Vec<PointPress<'_>> = contacts
@@ -146,15 +120,13 @@ pub(super) fn press_all(
     let Ok(ids) = surface.press_points(&presses) else {
         return;
     };
-    for (((c, id), tool), v) in contacts.iter().zip(ids).zip(owners).zip(velocities) {
+    for ((c, id), tool) in contacts.iter().zip(ids).zip(owners) {
         if let Some(id) = id {
             pressed.push(Pressed {
                 tool: *tool,
                 id,
                 normal: c.normal,
                 point: c.point,
-                feature: c.tool_feature,
-                travel: (v * h).abs(),
                 impulse: 0.0,
             });
         }

@@ -3,7 +3,8 @@
 use super::events::{ToolTouchEvent, TouchTracker};
 use super::holding::{attached_with_pose, lerp_pose, surface_substep, ToolMotion};
 use super::pressing::Pressed;
-use crate::geometry::{SurfaceContact, TouchMesh};
+use super::tool_shape::ToolShape;
+use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
 use parry3d::shape::{SharedShape, TriMeshFlags};
@@ -174,8 +175,8 @@ struct ToolState {
     /// Whether the tool's solver-group filter held [`SURFACE_SOLVER_GROUP`] before
     /// [`SurfaceSet::add_tool`] dropped it (restored by [`SurfaceSet::remove_tool`]).
     had_surface_group: bool,
-    /// The tool's touch mesh when its shape is polyhedral.
-    mesh: Option<Arc<TouchMesh>>,
+    /// The tool's shape as the coupling uses it.
+    shape: Arc<ToolShape>,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -426,7 +427,7 @@ impl SurfaceSet {
         if !(extent > 0.0 && extent.is_finite()) {
             return Err(CouplingError::ZeroSizeTool);
         }
-        let mesh = polyhedral_mesh(c.shape());
+        let shape = Arc::new(ToolShape::of(c.shape()));
         let g = c.solver_groups();
         let had_surface_group = g.filter.contains(SURFACE_SOLVER_GROUP);
         c.set_solver_groups(InteractionGroups::new(
@@ -442,7 +443,7 @@ impl SurfaceSet {
                 applied: (Vector::ZERO, Vector::ZERO),
                 haptic_prev: None,
                 had_surface_group,
-                mesh,
+                shape,
             },
         );
         Ok(())
@@ -545,7 +546,7 @@ impl SurfaceSet {
         let state = self.tools.get_mut(&tool)?;
         let start = state.haptic_prev.unwrap_or(device);
         state.haptic_prev = Some(device);
-        let mesh = state.mesh.clone();
+        let shape = state.shape.clone();
         let others: Vec<ToolMotion> = self
             .tools
             .iter()
@@ -556,14 +557,14 @@ impl SurfaceSet {
                     handle: *h,
                     start: p,
                     end: p,
-                    mesh: t.mesh.clone(),
+                    shape: t.shape.clone(),
                 })
             })
             .chain(std::iter::once(ToolMotion {
                 handle: tool,
                 start,
                 end: device,
-                mesh,
+                shape,
             }))
             .collect();
         let mut total = ToolReaction::default();
@@ -624,7 +625,7 @@ impl SurfaceSet {
                     handle: *h,
                     start: t.prev.unwrap_or(now),
                     end: now,
-                    mesh: t.mesh.clone(),
+                    shape: t.shape.clone(),
                 })
             })
             .collect();
@@ -642,7 +643,7 @@ impl SurfaceSet {
                         handle: t.handle,
                         start: lerp_pose(&t.start, &t.end, a_prev),
                         end: lerp_pose(&t.start, &t.end, a),
-                        mesh: t.mesh.clone(),
+                        shape: t.shape.clone(),
                     })
                     .collect();
                 for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {
@@ -704,17 +705,4 @@ impl SurfaceSet {
             }
         }
     }
-}
-
-/// The touch mesh of a polyhedral tool shape (cuboid, convex polyhedron, triangle mesh), whose
-/// vertices and edges can press a surface between its vertices. Curved and rounded shapes have
-/// no sharp features: the surface vertices they contain carry their contact.
-fn polyhedral_mesh(shape: &dyn parry3d::shape::Shape) -> Option<Arc<TouchMesh>> {
-    let polyhedral = shape.as_cuboid().is_some()
-        || shape.as_convex_polyhedron().is_some()
-        || shape.as_trimesh().is_some();
-    if !polyhedral {
-        return None;
-    }
-    TouchMesh::from_shape(shape).ok().map(Arc::new)
 }

@@ -18,3 +18,4 @@ mod sharp_tools;
 mod spinning_drop;
 mod stress_scenes;
 mod surface;
+mod tool_shapes;

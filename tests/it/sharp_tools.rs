@@ -416,7 +416,7 @@ fn surface_contact_search_on_bad_input_finds_nothing() {
             triangles: tris,
         };
         let mut out = Vec::new();
-        tool_surface_contacts(&surface, cand, &cube, s, e, 1e-6, &|_| 0.0, &mut out);
+        tool_surface_contacts(&surface, cand, &cube, s, e, 1e-6, &mut out);
         out
     };
     let good = [[0, 2, 1], [0, 3, 2]];

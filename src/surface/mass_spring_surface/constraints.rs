@@ -18,7 +18,8 @@ pub(crate) struct PointHold {
     count: usize,
     /// Unit direction the holder pushes the point in.
     normal: DVec3,
-    /// The impulse (N·s, along `normal`) the holder gave in the last step.
+    /// The impulse (N·s, along `normal`) the holder gave: the press's velocity change, plus the
+    /// constraint impulse of the step after it.
     impulse: f64,
     /// The least velocity along `normal` the point may have after the step: the holder's for
     /// a point in contact; less by `gap / dt` for a point `gap` short of its holder (it may
@@ -113,11 +114,10 @@ impl MassSpringSurface {
     /// vertex do not undo each other). Pinned and held vertices do not move. In the next
     /// filtered step each point keeps its normal velocity: its impulse is solved with the vertex
     /// holds' through the filter's columns at its vertices; it is free along its tangent plane
-    /// (frictionless), and a point whose impulse would pull is let go. A press the others'
-    /// pushes already satisfy (pushing one point of a triangle moves its neighbours) is left
-    /// where they put it and held as a speculative contact: over the next step it may close its
-    /// gap to the holder, not pass it. A negative `depth` (a point its last hold carried past
-    /// a holder that stopped) moves the point back to the holder. Returns each press's index
+    /// (frictionless), and a point whose impulse would pull is let go. A press with a negative
+    /// `depth` (its holder is that far above it), or one the others' pushes already satisfy
+    /// (pushing one point of a triangle moves its neighbours), is not moved and is held as a
+    /// speculative contact: over the next step it may close its gap to the holder, not pass it. Returns each press's index
     /// for [`MassSpringSurface::point_impulse`], or `None` for a press on a held vertex (its
     /// holder carries the contact there) or with less than a quarter of its weight on free
     /// vertices (its pinned vertices carry it). The explicit and Baraff-Witkin integrators apply
@@ -196,34 +196,35 @@ impl MassSpringSurface {
         for i in 0..m {
             a[(i, i)] += 1e-12 * scale;
         }
-        // Positions: presses with a depth only push; a negative depth (a point carried past
-        // its holder) may pull back.
+        // Positions: presses only push; one with a negative depth (a speculative contact short
+        // of its holder) or that the others' pushes satisfy is left out.
         let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
         let tol = 1e-9 * depth.amax();
-        let Some((mu, active)) = solve_pushing(&a, &depth, |i| depth[i] >= 0.0, tol) else {
+        let Some((mu, active)) = solve_pushing(&a, &depth, |_| true, tol) else {
             return Ok(out.iter().map(|_| None).collect());
         };
-        // Velocities: the pushing presses get their holder's normal velocity.
+        // Velocities: the pushing presses get their holder's normal velocity, by impulses that
+        // only push (a point already leaving its holder faster keeps its velocity).
         let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
         let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
         let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
-        let nu = match sub.clone().cholesky() {
-            Some(ch) => Some(ch.solve(&dv)),
-            None => sub.lu().solve(&dv),
-        };
-        let Some(nu) = nu.filter(|nu| nu.iter().all(|x| x.is_finite())) else {
+        let vtol = 1e-9 * (1.0 + dv.amax());
+        let Some((nu, _)) = solve_pushing(&sub, &dv, |_| true, vtol) else {
             return Ok(out.iter().map(|_| None).collect());
         };
         for (r, &i) in rows.iter().enumerate() {
-            let hold = &kept[i].0;
+            let hold = &mut kept[i].0;
+            // The impulse the press gave: the start of what the hold reports.
+            hold.impulse = nu[r];
             for (v, w) in hold.entries() {
                 let share = w * inv_mass(self, v);
                 self.pos[v as usize] += hold.normal * (share * mu[i]);
                 self.vel[v as usize] += hold.normal * (share * nu[r]);
             }
         }
-        // A press the others' pushes already satisfy is left `gap` short of its holder: it is
-        // held as a speculative contact that may close the gap over the next step, not more.
+        // A press left out is `gap` short of its holder (its own negative depth, or where the
+        // others' pushes put it): it is held as a speculative contact that may close the gap
+        // over the next step, not more.
         for (i, k) in kept.iter_mut().enumerate() {
             if active[i] {
                 continue;
@@ -277,8 +278,10 @@ impl MassSpringSurface {
     }
 
     /// The impulse (N·s, along its normal; positive when pushing) hold `id` of
-    /// [`MassSpringSurface::press_point`] gave the surface during the last step, or `None`
-    /// for no such hold. Zero until a filtered step has run with it.
+    /// [`MassSpringSurface::press_points`] has given the surface: the press's own velocity
+    /// change, plus the constraint impulse of the filtered step after it (all the momentum the
+    /// holder gave the surface from the press to the end of that step). `None` for no such
+    /// hold.
     pub fn point_impulse(&self, id: usize) -> Option<Real> {
         self.point_holds.get(id).map(|h| h.impulse as Real)
     }
@@ -472,7 +475,7 @@ pub(super) fn constrain(
             impulse[k] += *d * (w * lambda[c]);
         }
         if let Some(pi) = point {
-            points[*pi].impulse = lambda[c];
+            points[*pi].impulse += lambda[c];
         }
     }
     for (k, &fj) in list.iter().enumerate() {
