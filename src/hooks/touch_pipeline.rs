@@ -7,6 +7,7 @@ use super::touch_hooks::{
     body_motion, meshed_exactly, pair_configuration, previous_collider_pose, shape_key, CachedMesh,
     ShapeKey, TouchHooks,
 };
+use crate::coupling::SurfaceSet;
 use crate::geometry::{
     ReconstructionOptions, Reconstructor, TouchMesh, TouchMeshError, TouchState,
 };
@@ -327,6 +328,58 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// Steps `world` once: see the type's documentation.
     pub fn step(&mut self, world: &mut PhysicsWorld) {
         self.step_with_events(world, &());
+    }
+
+    /// The crate's main loop in one call: steps `world` through this pipeline (rapier's step,
+    /// the hooks and the step guard), then every surface of `surfaces` (their substeps, the
+    /// tools' reactions, the two-way coupling and the surface colliders' refit), in that order.
+    /// The same as `surfaces.step_with(world, |w| touch.step(w))`.
+    ///
+    /// A surface's collider and its tools may be opted in: the guard obeys the solver group
+    /// [`crate::coupling::SurfaceSet::add_tool`] takes off a tool, so a tool is not stopped at
+    /// the surface's collider (the surface answers it instead).
+    ///
+    /// # Example
+    /// A rigid box dropped on a guarded floor and a ball tool pressing a soft plate, one loop:
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::rapier3d::prelude::*;
+    /// use rapier_touch::surface::meshing::{plate, plate_rim};
+    ///
+    /// let mut world = PhysicsWorld::default();
+    /// TouchPipeline::configure(&mut world.integration_parameters);
+    /// let hooks = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    /// world.insert_collider(ColliderBuilder::cuboid(5.0, 0.05, 5.0).active_hooks(hooks), None);
+    /// let body = world.insert_body(
+    ///     RigidBodyBuilder::dynamic()
+    ///         .translation(Vector::new(3.0, 2.0, 0.0))
+    ///         .linvel(Vector::new(0.0, -30.0, 0.0)),
+    /// );
+    /// world.insert_collider(ColliderBuilder::cuboid(0.2, 0.2, 0.2).active_hooks(hooks), Some(body));
+    ///
+    /// let mut surfaces = SurfaceSet::new();
+    /// let ground = world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 1.0, 0.0)));
+    /// let mesh = plate(1.0, 1.0, 8, 8);
+    /// let soft = MassSpringSurfaceBuilder::from_mesh(&mesh).pinned(plate_rim(8, 8)).build().unwrap();
+    /// let options = AttachOptions { substeps: 8, collider: true };
+    /// surfaces.insert(soft, ground, &mut world, options).unwrap();
+    /// let tool_body = world.insert_body(
+    ///     RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, 1.1, 0.0)),
+    /// );
+    /// let tool = world.insert_collider(ColliderBuilder::ball(0.05), Some(tool_body));
+    /// surfaces.add_tool(tool, &mut world).unwrap();
+    ///
+    /// let mut touch = TouchPipeline::default();
+    /// for step in 1..=60 {
+    ///     let y = (1.1 - 0.005 * step as f32).max(1.03);
+    ///     world.bodies[tool_body].set_next_kinematic_translation(Vector::new(0.0, y, 0.0));
+    ///     touch.step_with_surfaces(&mut world, &mut surfaces);
+    /// }
+    /// assert!(world.bodies[body].translation().y > 0.2); // on the floor, not through it
+    /// assert!(surfaces.tool_reaction(tool).unwrap().force.y > 0.0); // the plate pushes back
+    /// ```
+    pub fn step_with_surfaces(&mut self, world: &mut PhysicsWorld, surfaces: &mut SurfaceSet) {
+        surfaces.step_with(world, |w| self.step(w));
     }
 
     /// Like [`TouchPipeline::step`], with rapier's event handler.

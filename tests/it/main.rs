@@ -7,6 +7,7 @@ mod curved_reconstruction;
 mod every_scale;
 mod fig4;
 mod gltf_input;
+mod main_loop;
 mod mesh_inputs;
 mod pipeline;
 mod prelude;
