@@ -83,6 +83,10 @@ pub enum SpringModel {
     Length,
 }
 
+/// The default surface density of a triangle-mesh surface (kg/m²): a 1 cm layer of
+/// water-dense tissue.
+pub const DEFAULT_AREA_DENSITY: Real = 10.0;
+
 /// How the vertex masses are lumped.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub enum MassDistribution {
@@ -261,8 +265,10 @@ pub struct MassSpringSurfaceBuilder {
 }
 
 impl MassSpringSurfaceBuilder {
-    /// A surface on this triangle mesh, with stiffness 100 N/m, damping 1 N·s/m, 1 kg per
-    /// vertex, no gravity, no pins, dt = 1/60 s, the exact filter and the linear spring model.
+    /// A surface on this triangle mesh, with stiffness 100 N/m, damping 1 N·s/m, a surface
+    /// density of [`DEFAULT_AREA_DENSITY`] (10 kg/m²: a 1 cm layer of water-dense tissue, lumped
+    /// a third of each triangle's area per vertex), no gravity, no pins, dt = 1/60 s, the exact
+    /// filter and the linear spring model.
     pub fn new(vertices: Vec<Vector>, triangles: Vec<[u32; 3]>) -> Self {
         Self {
             vertices,
@@ -271,7 +277,7 @@ impl MassSpringSurfaceBuilder {
             stiffness: 100.0,
             damping: 1.0,
             edge_overrides: Vec::new(),
-            mass: MassDistribution::PerVertex(1.0),
+            mass: MassDistribution::AreaDensity(DEFAULT_AREA_DENSITY),
             pinned: Vec::new(),
             gravity: Vector::ZERO,
             spring_model: SpringModel::Linear,
@@ -285,10 +291,12 @@ impl MassSpringSurfaceBuilder {
         Self::new(mesh.vertices.clone(), mesh.triangles.clone())
     }
     /// A spring network with no triangles (a chain, a lattice): the same model on explicit
-    /// edges. [`MassDistribution::AreaDensity`] needs triangles and is an error here.
+    /// edges, 1 kg per vertex by default (with no area, a density has nothing to act on).
+    /// [`MassDistribution::AreaDensity`] needs triangles and is an error here.
     pub fn network(vertices: Vec<Vector>, edges: Vec<[u32; 2]>) -> Self {
         let mut b = Self::new(vertices, Vec::new());
         b.extra_edges = edges;
+        b.mass = MassDistribution::PerVertex(1.0);
         b
     }
     /// Spring stiffness of every edge (N/m).
@@ -311,7 +319,8 @@ impl MassSpringSurfaceBuilder {
         self.edge_overrides.push(([a, b], None, Some(c)));
         self
     }
-    /// How masses are lumped.
+    /// How masses are lumped (default: [`MassDistribution::AreaDensity`] of
+    /// [`DEFAULT_AREA_DENSITY`] for a triangle mesh, 1 kg per vertex for a network).
     pub fn mass(mut self, m: MassDistribution) -> Self {
         self.mass = m;
         self

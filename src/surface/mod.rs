@@ -14,5 +14,5 @@ pub mod meshing;
 pub use filter::{FilterError, FilterKind};
 pub use mass_spring_surface::{
     ForceProfile, Integrator, MassDistribution, MassSpringSurface, MassSpringSurfaceBuilder,
-    PointPress, SpringModel, SurfaceError,
+    PointPress, SpringModel, SurfaceError, DEFAULT_AREA_DENSITY,
 };

@@ -557,6 +557,7 @@ fn bad_point_presses_are_errors() {
     let (v, t) = grid(2, 2, 1.0);
     let mut s = MassSpringSurfaceBuilder::new(v, t)
         .pinned([0])
+        .mass(MassDistribution::PerVertex(1.0))
         .build()
         .unwrap();
     let down = Vector::new(0.0, -1.0, 0.0);
