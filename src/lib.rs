@@ -62,6 +62,7 @@ pub mod render;
 #[cfg(feature = "fixtures")]
 pub mod scenes;
 pub mod surface;
+mod touch_diff;
 
 /// Everything a user needs, in one import.
 ///
@@ -92,7 +93,8 @@ pub mod prelude {
         RigidMotion, TouchMesh, TouchMeshError, TouchState,
     };
     pub use crate::hooks::{
-        HookCounters, PairReport, ToolFeedback, TouchHooks, TouchOptions, TouchPipeline,
+        HookCounters, PairReport, PairTouchEvent, ToolFeedback, TouchHooks, TouchOptions,
+        TouchPipeline,
     };
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use crate::surface::{

@@ -2,6 +2,7 @@
 //! `CollisionEvent` reports colliders starting or stopping to touch.
 
 use super::surface_set::SurfaceHandle;
+use crate::touch_diff::TouchDiff;
 use parry3d::utils::hashset::HashSet;
 use rapier3d::geometry::ColliderHandle;
 
@@ -42,37 +43,15 @@ impl ToolTouchEvent {
     }
 }
 
-/// The pairs touching at the end of the last step, and the events not drained yet.
-#[derive(Clone, Debug, Default)]
-pub(super) struct TouchTracker {
-    touching: HashSet<(ColliderHandle, SurfaceHandle)>,
-    events: Vec<ToolTouchEvent>,
-}
+/// The tool-surface pairs touching at the end of the last step, and their events.
+pub(super) type TouchTracker = TouchDiff<(ColliderHandle, SurfaceHandle), ToolTouchEvent>;
 
-impl TouchTracker {
-    /// Compares the pairs touching now with those of the last step, and records the changes
-    /// (in a deterministic order: by tool, then by surface).
-    pub(super) fn update(&mut self, now: HashSet<(ColliderHandle, SurfaceHandle)>) {
-        let key = |(t, s): &(ColliderHandle, SurfaceHandle)| (t.into_raw_parts(), s.raw());
-        let mut started: Vec<_> = now.difference(&self.touching).copied().collect();
-        let mut stopped: Vec<_> = self.touching.difference(&now).copied().collect();
-        started.sort_unstable_by_key(key);
-        stopped.sort_unstable_by_key(key);
-        self.events.extend(
-            stopped
-                .into_iter()
-                .map(|(tool, surface)| ToolTouchEvent::Stopped { tool, surface }),
-        );
-        self.events.extend(
-            started
-                .into_iter()
-                .map(|(tool, surface)| ToolTouchEvent::Started { tool, surface }),
-        );
-        self.touching = now;
-    }
-
-    /// The events since the last drain, oldest first.
-    pub(super) fn drain(&mut self) -> std::vec::Drain<'_, ToolTouchEvent> {
-        self.events.drain(..)
-    }
+/// Records the tool-surface pairs touching now ([`TouchDiff::update`], by tool then surface).
+pub(super) fn update(tracker: &mut TouchTracker, now: HashSet<(ColliderHandle, SurfaceHandle)>) {
+    tracker.update(
+        now,
+        |(t, s)| (t.into_raw_parts(), s.raw()),
+        |(tool, surface)| ToolTouchEvent::Stopped { tool, surface },
+        |(tool, surface)| ToolTouchEvent::Started { tool, surface },
+    );
 }

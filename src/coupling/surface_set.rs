@@ -664,7 +664,7 @@ impl SurfaceSet {
                 }
             }
         }
-        self.touch.update(touching);
+        super::events::update(&mut self.touch, touching);
         // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step).
         for (_, entry) in self.entries.iter_mut() {
             let Some(s) = entry.as_mut() else {

@@ -24,11 +24,13 @@
 //!   travel under their safe step length) keep rapier's soft contact, in the guard and in the
 //!   hooks alike.
 
+mod events;
 mod pair_filter;
 mod report;
 mod touch_hooks;
 mod touch_pipeline;
 
+pub use events::PairTouchEvent;
 pub use report::{PairReport, ToolFeedback};
 pub use touch_hooks::{HookCounters, TouchHooks};
 pub use touch_pipeline::{TouchOptions, TouchPipeline};

@@ -1,6 +1,7 @@
 //! [`TouchPipeline`]: one call that steps a rapier `PhysicsWorld` with the touch hooks, the
 //! step guard, the tools' proxies and the contact report.
 
+use super::events::{self, PairTouchEvent, PairTracker};
 use super::pair_filter::{rapier_solves_pair, user_removes_contact};
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
@@ -197,6 +198,8 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     pair_states: HashMap<(ColliderHandle, ColliderHandle), PairState>,
     /// Opted-in colliders whose shape has no touch mesh: the shape's address and why.
     refused: HashMap<ColliderHandle, (usize, TouchMeshError)>,
+    /// Touch started / ended per pair ([`TouchPipeline::drain_touch_events`]).
+    touch: PairTracker,
 }
 
 impl<H: PhysicsHooks> std::fmt::Debug for TouchPipeline<H> {
@@ -249,6 +252,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             hooked: HashSet::default(),
             pair_states: HashMap::default(),
             refused: HashMap::default(),
+            touch: PairTracker::default(),
         }
     }
 
@@ -422,6 +426,55 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 t.proxy = p;
             }
         }
+        self.record_touches(world);
+    }
+
+    /// The pairs that started or stopped touching, step by step, since the last drain (oldest
+    /// first); see [`PairTouchEvent`].
+    ///
+    /// # Example
+    /// A box dropped on an opted-in slab starts touching it and, lifted off, stops:
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::rapier3d::prelude::*;
+    ///
+    /// let mut world = PhysicsWorld::default();
+    /// let slab = world.insert_collider(ColliderBuilder::cuboid(5.0, 0.05, 5.0), None);
+    /// let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.5, 0.0)));
+    /// let cube = world.insert_collider(ColliderBuilder::cuboid(0.2, 0.2, 0.2), Some(body));
+    /// let mut touch = TouchPipeline::default();
+    /// touch.track_collider(slab);
+    /// for _ in 0..60 {
+    ///     touch.step(&mut world);
+    /// }
+    /// let events: Vec<PairTouchEvent> = touch.drain_touch_events().collect();
+    /// assert_eq!(events, [PairTouchEvent::Started { collider1: slab, collider2: cube }]);
+    /// world.bodies[body].set_translation(Vector::new(0.0, 3.0, 0.0), true);
+    /// touch.step(&mut world);
+    /// touch.step(&mut world);
+    /// assert!(touch.drain_touch_events().any(|e| !e.started() && e.pair() == (slab, cube)));
+    /// ```
+    pub fn drain_touch_events(&mut self) -> impl Iterator<Item = PairTouchEvent> + '_ {
+        self.touch.drain()
+    }
+
+    /// The pairs touching after the step (rapier's active contacts with an opted-in collider,
+    /// and the pairs reported), compared with the last step's.
+    fn record_touches(&mut self, world: &PhysicsWorld) {
+        let meshes = &self.hooks.meshes;
+        let mut now: HashSet<(ColliderHandle, ColliderHandle)> = world
+            .narrow_phase
+            .contact_pairs()
+            .filter(|p| p.has_any_active_contact())
+            .filter(|p| meshes.contains_key(&p.collider1) || meshes.contains_key(&p.collider2))
+            .map(|p| events::ordered(p.collider1, p.collider2))
+            .collect();
+        now.extend(
+            self.reports
+                .iter()
+                .map(|r| events::ordered(r.fixed, r.moving)),
+        );
+        events::update(&mut self.touch, now);
     }
 
     /// Builds (or drops) the touch meshes of opted-in colliders.

@@ -9,6 +9,7 @@ mod fig4;
 mod gltf_input;
 mod main_loop;
 mod mesh_inputs;
+mod pair_events;
 mod pipeline;
 mod prelude;
 mod rapier_semantics;
