@@ -93,8 +93,8 @@ pub mod prelude {
         RigidMotion, TouchMesh, TouchMeshError, TouchState,
     };
     pub use crate::hooks::{
-        HookCounters, PairReport, PairTouchEvent, ToolFeedback, TouchHooks, TouchOptions,
-        TouchPipeline,
+        HookCounters, PairReport, PairTouchEvent, PhysicsSets, ToolFeedback, TouchHooks,
+        TouchOptions, TouchPipeline,
     };
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use crate::surface::{

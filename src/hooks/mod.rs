@@ -27,10 +27,12 @@
 mod events;
 mod pair_filter;
 mod report;
+mod sets;
 mod touch_hooks;
 mod touch_pipeline;
 
 pub use events::PairTouchEvent;
 pub use report::{PairReport, ToolFeedback};
+pub use sets::PhysicsSets;
 pub use touch_hooks::{HookCounters, TouchHooks};
 pub use touch_pipeline::{TouchOptions, TouchPipeline};
