@@ -7,6 +7,7 @@
 //! the deformed surface, and the surface is dented under every leg or jaw.
 
 use parry3d::query::PointQuery;
+use proptest::prelude::*;
 use rapier_touch::geometry::generators::extruded_polygon;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -26,6 +27,17 @@ struct Pressed {
 /// 5 cm above the plate's centre to `DEPTH` into it over 40 steps, then holds it 200 steps;
 /// after every step no probe (tool frame) is below the deformed surface.
 fn press(shape: SharedShape, turn: Rotation, lowest: f32, probes: &[Vector]) -> Pressed {
+    press_at(shape, turn, lowest, probes, (0.013, -0.021))
+}
+
+/// [`press`] over the plate point `at` (x, z).
+fn press_at(
+    shape: SharedShape,
+    turn: Rotation,
+    lowest: f32,
+    probes: &[Vector],
+    at: (f32, f32),
+) -> Pressed {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
@@ -46,8 +58,8 @@ fn press(shape: SharedShape, turn: Rotation, lowest: f32, probes: &[Vector]) -> 
         collider: true,
     };
     let surface = set.insert(surface, ground, &mut world, options).unwrap();
-    let above = Vector::new(0.013, 0.05 - lowest, -0.021);
-    let below = Vector::new(0.013, -DEPTH - lowest, -0.021);
+    let above = Vector::new(at.0, 0.05 - lowest, at.1);
+    let below = Vector::new(at.0, -DEPTH - lowest, at.1);
     let body = world.insert_body(
         RigidBodyBuilder::kinematic_position_based().pose(Pose::from_parts(above, turn)),
     );
@@ -198,9 +210,9 @@ fn u_shaped_trimesh_tool_pressed_corner_first_holds_and_gets_the_pins_force() {
     check(&r, inside, &[(at.x, at.z)], "U corner first");
 }
 
-#[test]
-fn two_jaw_compound_tool_holds_with_both_jaws_and_gets_the_pins_force() {
-    // Two cuboid jaws (30 x 60 x 40 mm) 120 mm apart on a 20 mm thick bar.
+/// Two cuboid jaws (30 x 60 x 40 mm) 120 mm apart on a 20 mm thick bar, and their bottom
+/// corners.
+fn jaws() -> (SharedShape, Vec<Vector>) {
     let jaw = SharedShape::cuboid(0.015, 0.03, 0.02);
     let bar = SharedShape::cuboid(0.09, 0.01, 0.02);
     let shape = SharedShape::compound(vec![
@@ -211,20 +223,73 @@ fn two_jaw_compound_tool_holds_with_both_jaws_and_gets_the_pins_force() {
         (Pose::from_translation(Vector::new(0.075, 0.03, 0.0)), jaw),
         (Pose::from_translation(Vector::new(0.0, 0.07, 0.0)), bar),
     ]);
-    let probes: Vec<Vector> = [-0.09, -0.06, 0.06, 0.09]
+    let probes = [-0.09, -0.06, 0.06, 0.09]
         .iter()
         .flat_map(|&x| [Vector::new(x, 0.0, -0.02), Vector::new(x, 0.0, 0.02)])
         .collect();
-    let r = press(shape, Rotation::IDENTITY, 0.0, &probes);
+    (shape, probes)
+}
+
+/// The U's leg-bottom corners.
+fn u_corners() -> Vec<Vector> {
+    [-0.09, -0.05, 0.05, 0.09]
+        .iter()
+        .flat_map(|&x| [Vector::new(x, 0.0, -0.04), Vector::new(x, 0.0, 0.04)])
+        .collect()
+}
+
+/// How deep `p` is inside the collider (0 outside), by parry's query on its shape.
+fn inside_of(r: &Pressed) -> impl Fn(Vector) -> f32 + '_ {
     let pose = *r.world.colliders[r.tool].position();
-    let compound = r.world.colliders[r.tool].shape();
-    let inside = move |p: Vector| {
-        let proj = compound.project_point(&pose, p, false);
+    let shape = r.world.colliders[r.tool].shape();
+    move |p| {
+        let proj = shape.project_point(&pose, p, false);
         if proj.is_inside {
             (proj.point - p).length()
         } else {
             0.0
         }
-    };
-    check(&r, inside, &[(-0.062, -0.021), (0.088, -0.021)], "two jaws");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// The U or the jaws, turned any way about the vertical and tilted up to 0.4 rad about a
+    /// horizontal axis, pressed anywhere within 15 cm of the plate's centre: the pins' balance,
+    /// no vertex inside, no corner under the surface, a dent under the lowest corner.
+    #[test]
+    fn tilted_non_convex_and_compound_tools_hold_anywhere(
+        u in any::<bool>(), yaw in 0.0f32..std::f32::consts::TAU, tilt in 0.0f32..0.4,
+        tilt_axis in 0.0f32..std::f32::consts::TAU, x in -0.15f32..0.15, z in -0.15f32..0.15,
+    ) {
+        let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
+        let turn = Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw);
+        let (shape, probes) = if u { (u_shape(), u_corners()) } else { jaws() };
+        let lowest = probes.iter().map(|c| (turn * *c).y).fold(f32::MAX, f32::min);
+        let r = press_at(shape, turn, lowest, &probes, (x, z));
+        let tip = probes
+            .iter()
+            .copied()
+            .min_by(|a, b| (turn * *a).y.total_cmp(&(turn * *b).y))
+            .unwrap();
+        let at = r.world.colliders[r.tool].position().transform_point(tip);
+        if u {
+            check(&r, inside_u(&r), &[(at.x, at.z)], "U");
+        } else {
+            check(&r, inside_of(&r), &[(at.x, at.z)], "jaws");
+        }
+    }
+}
+
+#[test]
+fn two_jaw_compound_tool_holds_with_both_jaws_and_gets_the_pins_force() {
+    let (shape, probes) = jaws();
+    let r = press(shape, Rotation::IDENTITY, 0.0, &probes);
+    check(
+        &r,
+        inside_of(&r),
+        &[(-0.062, -0.021), (0.088, -0.021)],
+        "two jaws",
+    );
 }
