@@ -3,8 +3,8 @@
 //! across surface edges ([`crate::geometry::tool_surface_contacts`]); each contact point is
 //! pushed onto the tool and held there along the contact normal
 //! ([`MassSpringSurface::press_point`]), loading the vertices around it by their weights inside
-//! the filter's constraint solve. The tool gets the impulses those holds gave in the next
-//! surface step.
+//! the filter's constraint solve. The tool gets the impulses those holds gave: the press's own
+//! velocity change and the next surface step's constraint impulse.
 
 use crate::geometry::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot, TouchMesh};
 use crate::math::{Pose, Real, Vector};
@@ -21,13 +21,13 @@ pub(super) struct Pressed {
     /// Unit direction from the tool into the surface.
     pub normal: Vector,
     pub point: Vector,
-    /// The impulse the hold gave in the surface step after it (N·s, along `normal`), filled in
-    /// by [`record_impulses`].
+    /// The impulse the hold gave from the press through the surface step after it (N·s, along
+    /// `normal`), filled in by [`record_impulses`].
     pub impulse: Real,
 }
 
-/// Reads the impulses the holds of `pressed` gave in the surface step just taken (before the
-/// surface releases them).
+/// Reads the impulses the holds of `pressed` gave up to the end of the surface step just taken
+/// (before the surface releases them).
 pub(super) fn record_impulses(surface: &MassSpringSurface, pressed: &mut [Pressed]) {
     for p in pressed {
         p.impulse = surface.point_impulse(p.id).unwrap_or(0.0);
@@ -117,6 +117,8 @@ pub(super) fn press_all(
             normal_velocity: v,
         })
         .collect();
+    // The geometry layer's contacts are finite, with weights on existing vertices: an error
+    // here would mean a bug, and then nothing is pressed in this substep.
     let Ok(ids) = surface.press_points(&presses) else {
         return;
     };
