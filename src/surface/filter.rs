@@ -84,6 +84,13 @@ pub(crate) struct Csr {
 
 impl Csr {
     /// `y = A x` over `Vec3`s (one read of the matrix).
+    ///
+    /// Hand-written on purpose: faer's `sparse_dense_matmul` on the same matrix (built once with
+    /// [`Csr::to_faer`], the three coordinates copied into and out of an `n × 3` `Mat` each
+    /// step) made a whole neighbour-filter step slower in one `cargo bench --bench soft_step --
+    /// neighbour` A/B on this crate's 2-core machine (2026-11-23): 784 nodes 22.3 → 31.4 µs,
+    /// 3,025 nodes 94 → 150 µs, 10,000 nodes 351 → 612 µs, 19,881 nodes 806 → 1044 µs. faer
+    /// builds, multiplies and factors the matrices everywhere else in this file.
     #[inline]
     pub fn mul_vec3(&self, x: &[DVec3], y: &mut [DVec3]) {
         for (yi, w) in y.iter_mut().zip(self.ptr.windows(2)) {
