@@ -295,8 +295,8 @@ impl MassSpringSurface {
 /// Solves `A x = b` for contact rows that push (an active set, Lawson-Hanson style): a row
 /// with `push_only(i)` must end with `xᵢ ≥ 0`, the others may have any sign; a row left out has
 /// `xᵢ = 0` and must end satisfied, `bᵢ - (A x)ᵢ ≤ tol` (the other rows' pushes did its work).
-/// Each pass drops the most pulling push-only row or takes back the most violated row left out;
-/// at most `2m + 2` passes. Returns `x` (zero on the rows left out) and which rows are in, or
+/// Each pass drops the push-only rows that pull, or else takes back the violated rows left
+/// out; at most `2m + 2` passes. Returns `x` (zero on the rows left out) and which rows are in, or
 /// `None` when a solve fails or is not finite. Shared by the presses' position projection and
 /// the filtered step's impulses.
 fn solve_pushing(
@@ -324,25 +324,25 @@ fn solve_pushing(
             x[i] = sol[r];
         }
         let floor = -1e-9 * x.amax();
-        let pulling = rows
+        // Drop every push-only row that pulls; otherwise take back every row left out that is
+        // violated. All at once: one factorization per pass, a few passes (one row per pass
+        // cost a factorization per contact on a cube's face: 16 ms a step for six cubes).
+        let pulling: Vec<usize> = rows
             .iter()
             .copied()
             .filter(|&i| push_only(i) && x[i] < floor)
-            .min_by(|&i, &j| x[i].total_cmp(&x[j]));
-        if let Some(i) = pulling {
-            active[i] = false;
+            .collect();
+        if !pulling.is_empty() {
+            pulling.iter().for_each(|&i| active[i] = false);
             continue;
         }
-        let violated = (0..m)
-            .filter(|&i| !active[i])
-            .map(|i| (i, b[i] - a.row(i).dot(&x.transpose())))
-            .filter(|&(_, r)| r > tol)
-            .max_by(|p, q| p.1.total_cmp(&q.1))
-            .map(|(i, _)| i);
-        match violated {
-            Some(i) => active[i] = true,
-            None => break,
+        let violated: Vec<usize> = (0..m)
+            .filter(|&i| !active[i] && b[i] - a.row(i).dot(&x.transpose()) > tol)
+            .collect();
+        if violated.is_empty() {
+            break;
         }
+        violated.iter().for_each(|&i| active[i] = true);
     }
     Some((x, active))
 }
