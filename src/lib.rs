@@ -35,6 +35,9 @@
 //! - [`coupling`]: soft surfaces on rapier bodies, pressed by rigid tools.
 //! - [`hooks`]: the rapier integration: [`hooks::TouchPipeline`] steps a `PhysicsWorld` with
 //!   [`hooks::TouchHooks`], a step guard against tunneling, tool proxies and contact reports.
+//! - `bevy_plugin` (feature `bevy`): the same in bevy_rapier3d 0.37's schedule: components
+//!   for tracked colliders, soft surfaces and tools, the hooks through bevy_rapier's hook
+//!   mechanism, the guard and the surfaces after its step.
 //!
 //! ## Caveats
 //! - A body that also rotated over the step is walked back along its real path
@@ -53,6 +56,8 @@
 pub use parry3d;
 pub use rapier3d;
 
+#[cfg(feature = "bevy")]
+pub mod bevy_plugin;
 pub mod coupling;
 pub mod geometry;
 pub mod hooks;

@@ -9,7 +9,7 @@ use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
 use parry3d::shape::{SharedShape, TriMeshFlags};
 use rapier3d::dynamics::RigidBodyHandle;
-use rapier3d::geometry::{ColliderBuilder, ColliderHandle, Group, InteractionGroups};
+use rapier3d::geometry::{ColliderBuilder, ColliderHandle, ColliderSet, Group, InteractionGroups};
 use rapier3d::pipeline::PhysicsWorld;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -598,19 +598,24 @@ impl SurfaceSet {
         world: &mut PhysicsWorld,
         rigid_step: impl FnOnce(&mut PhysicsWorld),
     ) {
-        // Tool poses at the start of the step.
-        self.tools.retain(|h, _| world.colliders.contains(*h));
-        for (h, t) in self.tools.iter_mut() {
-            t.prev = world.colliders.get(*h).map(|c| *c.position());
-        }
+        self.begin_step(&world.colliders);
         rigid_step(world);
         self.step_surfaces(world);
+    }
+
+    /// Records the tools' poses at the start of a rigid step (the first half of
+    /// [`SurfaceSet::step_with`], for engines that own the step).
+    pub(crate) fn begin_step(&mut self, colliders: &ColliderSet) {
+        self.tools.retain(|h, _| colliders.contains(*h));
+        for (h, t) in self.tools.iter_mut() {
+            t.prev = colliders.get(*h).map(|c| *c.position());
+        }
     }
 
     /// The surface part of a step: substeps with the tools' poses interpolated from the
     /// recorded start poses to their current ones, reactions, impulses on dynamic tools, and
     /// collider updates.
-    fn step_surfaces(&mut self, world: &mut PhysicsWorld) {
+    pub(crate) fn step_surfaces(&mut self, world: &mut PhysicsWorld) {
         let dt = world.integration_parameters.dt;
         for t in self.tools.values_mut() {
             t.reaction = ToolReaction::default();

@@ -16,7 +16,7 @@ use crate::math::{Pose, Real, Vector};
 use parry3d::bounding_volume::BoundingVolume;
 use parry3d::utils::hashmap::HashMap;
 use parry3d::utils::hashset::HashSet;
-use rapier3d::dynamics::{IntegrationParameters, RigidBodyHandle};
+use rapier3d::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use rapier3d::geometry::{ColliderHandle, ColliderSet};
 use rapier3d::pipeline::{ActiveHooks, EventHandler, PhysicsHooks, PhysicsWorld, QueryFilter};
 use std::sync::Arc;
@@ -388,15 +388,29 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
     /// Like [`TouchPipeline::step`], with rapier's event handler.
     pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler) {
-        self.refresh_meshes(&world.colliders);
+        let prev = self.begin_step(&mut world.bodies, &world.colliders);
+        world.step_with_events(&self.hooks, events);
+        self.end_step(world, prev);
+    }
+
+    /// The part of a step before rapier's: refreshes the touch meshes, aims the tools, and
+    /// returns where every body starts the step (hand it to [`TouchPipeline::end_step`]).
+    /// rapier's step between the two must run with [`TouchPipeline::hooks`]. For engines
+    /// that own the step (the bevy plugin); [`TouchPipeline::step`] is both halves.
+    pub(crate) fn begin_step(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) -> HashMap<RigidBodyHandle, Pose> {
+        self.refresh_meshes(colliders);
         self.hooks.options = self.options.reconstruction;
         self.hooks.slop = self.options.penetration_slop;
         self.reconstructor.options = self.options.reconstruction;
 
         // Tools: aim the kinematic bodies at their device pose.
-        self.tools.retain(|h, _| world.bodies.contains(*h));
+        self.tools.retain(|h, _| bodies.contains(*h));
         for (h, tool) in &self.tools {
-            if let Some(b) = world.bodies.get_mut(*h) {
+            if let Some(b) = bodies.get_mut(*h) {
                 if b.is_kinematic() {
                     b.set_next_kinematic_position(tool.device);
                 }
@@ -404,13 +418,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
 
         // Pose history: where every body starts this step.
-        let prev: HashMap<RigidBodyHandle, Pose> = world
-            .bodies
-            .iter()
-            .map(|(h, b)| (h, *b.position()))
-            .collect();
+        let prev = bodies.iter().map(|(h, b)| (h, *b.position())).collect();
         self.hooks.begin_step();
-        world.step_with_events(&self.hooks, events);
+        prev
+    }
+
+    /// The part of a step after rapier's: the step guard, the tool proxies and the touch
+    /// events; `prev` is what [`TouchPipeline::begin_step`] returned.
+    pub(crate) fn end_step(
+        &mut self,
+        world: &mut PhysicsWorld,
+        prev: HashMap<RigidBodyHandle, Pose>,
+    ) {
         self.hooks.prev_poses = prev;
 
         self.reports.clear();

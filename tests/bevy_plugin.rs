@@ -1,0 +1,219 @@
+//! The bevy plugin, headless: `MinimalPlugins`, bevy_rapier's plugin with the crate's hooks,
+//! and the crate's plugin, run through bevy's schedule (`cargo test --features bevy --test
+//! bevy_plugin`). Checked against physics, not against the crate: where a fast box ends
+//! (and where it ends without the plugin), and a static solve of the plate's springs.
+
+use bevy::asset::Assets;
+use bevy::mesh::{Mesh, Mesh3d, VertexAttributeValues};
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use bevy_rapier3d::plugin::context::{DefaultRapierContext, RapierContextSimulation};
+use bevy_rapier3d::prelude::*;
+use rapier_touch::bevy_plugin::*;
+use rapier_touch::prelude::{AttachOptions, MassDistribution, MassSpringSurfaceBuilder};
+use rapier_touch::surface::meshing::{plate, plate_rim};
+use std::time::Duration;
+
+// The static solves shared with the main integration tests (the rest of it is unused here).
+#[allow(dead_code)]
+#[path = "it/common.rs"]
+mod common;
+
+/// A headless app at 60 Hz, with (or without) the crate's plugin.
+fn app(with_touch: bool) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, TransformPlugin));
+    if with_touch {
+        app.add_plugins(RapierPhysicsPlugin::<TouchPhysicsHooks>::default())
+            .add_plugins(RapierTouchPlugin::default());
+    } else {
+        app.add_plugins(RapierPhysicsPlugin::<()>::default())
+            .insert_resource(TimestepMode::Fixed {
+                dt: 1.0 / 60.0,
+                substeps: 1,
+            });
+    }
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
+        1.0 / 60.0,
+    )))
+    .insert_resource(Assets::<Mesh>::default());
+    app.finish();
+    app.update();
+    app
+}
+
+/// Drops a spinning 0.2 m cube at 60 m/s (1 m per step) on a 2 cm floor, with rapier's CCD
+/// off so that the step guard alone is tested; returns the lowest and the last height of its
+/// lowest corner over two seconds.
+fn drop_fast_box(with_touch: bool) -> (f32, f32) {
+    let mut app = app(with_touch);
+    let mut contexts = app
+        .world_mut()
+        .query_filtered::<&mut RapierContextSimulation, With<DefaultRapierContext>>();
+    contexts
+        .single_mut(app.world_mut())
+        .unwrap()
+        .integration_parameters
+        .max_ccd_substeps = 0;
+    let floor = app
+        .world_mut()
+        .spawn((Collider::cuboid(5.0, 0.01, 5.0), Transform::default()))
+        .id();
+    if with_touch {
+        app.world_mut().entity_mut(floor).insert(TouchTracked);
+    }
+    let cube = app
+        .world_mut()
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::cuboid(0.1, 0.1, 0.1),
+            Velocity {
+                linear: Vec3::new(0.0, -60.0, 0.0),
+                angular: Vec3::new(3.0, 0.0, 5.0),
+            },
+            Transform::from_xyz(0.3, 1.5, -0.2),
+        ))
+        .id();
+    if with_touch {
+        app.world_mut().entity_mut(cube).insert(TouchTracked);
+    }
+    let mut lowest = f32::INFINITY;
+    let mut bottom = 0.0;
+    for _ in 0..120 {
+        app.update();
+        let t = app.world().get::<Transform>(cube).unwrap();
+        // The lowest corner of the (possibly tilted) cube.
+        bottom = [-1.0f32, 1.0]
+            .iter()
+            .flat_map(|&x| [-1.0f32, 1.0].map(move |y| (x, y)))
+            .flat_map(|(x, y)| [-1.0f32, 1.0].map(move |z| Vec3::new(x, y, z) * 0.1))
+            .map(|c| t.transform_point(c).y)
+            .fold(f32::INFINITY, f32::min);
+        lowest = lowest.min(bottom);
+    }
+    (lowest, bottom)
+}
+
+#[test]
+fn a_tracked_floor_stops_a_fast_box_that_rapier_alone_lets_through() {
+    // Without the plugin the box is below the floor after its first step into it.
+    let (_, vanilla_end) = drop_fast_box(false);
+    let (lowest, end) = drop_fast_box(true);
+    assert!(
+        vanilla_end < -0.5,
+        "rapier alone: bottom at {vanilla_end} m"
+    );
+    // With it, the box never sinks into the floor (top at y = 0.01) by more than the
+    // guard's slop, and ends resting on it.
+    assert!(lowest > 0.01 - 1e-3, "lowest bottom {lowest} m");
+    assert!((end - 0.01).abs() < 5e-3, "resting bottom {end} m");
+}
+
+/// The force pressing the centre vertex `c` of the plate to depth `d` with the rim pinned
+/// and the other vertices in equilibrium (linear springs `k` on every edge): `-(L u)_c`.
+fn static_force(triangles: &[[u32; 3]], n: usize, pins: &[u32], c: usize, d: f64, k: f64) -> f64 {
+    let lap = common::edge_laplacian(triangles, n, k);
+    let known: Vec<bool> = (0..n)
+        .map(|i| i == c || pins.contains(&(i as u32)))
+        .collect();
+    let mut u = vec![0.0; n];
+    u[c] = -d;
+    common::dirichlet_solve(&lap, &known, &mut u);
+    -(0..n).map(|j| lap[(c, j)] * u[j]).sum::<f64>()
+}
+
+#[test]
+fn a_tool_dents_a_soft_plate_its_mesh_follows_and_its_reaction_matches_a_static_solve() {
+    let mut app = app(true);
+    // A plate 1 m square, 10 x 10 cells, clamped at its rim, on a turned and moved body.
+    let (cells, k, depth, r) = (10, 100.0, 0.01, 0.02);
+    let soft = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, cells, cells))
+        .stiffness(k)
+        .mass(MassDistribution::Total(0.1))
+        .pinned(plate_rim(cells, cells))
+        .build()
+        .unwrap();
+    let triangles = soft.triangles().to_vec();
+    let n = soft.num_vertices();
+    let centre = (cells / 2 * (cells + 1) + cells / 2) as usize;
+    let mesh = app
+        .world_mut()
+        .resource_mut::<Assets<Mesh>>()
+        .add(surface_mesh(&soft));
+    let body = Transform::from_xyz(2.0, 1.0, -1.0).with_rotation(Quat::from_rotation_y(0.3));
+    let options = AttachOptions {
+        substeps: 8,
+        collider: true,
+    };
+    let surface = app
+        .world_mut()
+        .spawn((
+            RigidBody::Fixed,
+            body,
+            SoftSurface::new(soft, options),
+            Mesh3d(mesh.clone()),
+        ))
+        .id();
+    // A kinematic ball lowered onto the centre vertex, down to `depth` below the plate.
+    let above = body.transform_point(Vec3::new(0.0, 0.1, 0.0));
+    let below = body.transform_point(Vec3::new(0.0, r - depth, 0.0));
+    let ball = app
+        .world_mut()
+        .spawn((
+            RigidBody::KinematicPositionBased,
+            Collider::ball(r),
+            SurfaceTool,
+            Transform::from_translation(above),
+        ))
+        .id();
+    for frame in 1..=270 {
+        let a = (frame as f32 / 30.0).min(1.0);
+        app.world_mut()
+            .get_mut::<Transform>(ball)
+            .unwrap()
+            .translation = above.lerp(below, a);
+        app.update();
+    }
+
+    assert!(app
+        .world()
+        .get::<SoftSurface>(surface)
+        .unwrap()
+        .handle()
+        .is_some());
+    // The reaction component: up along the plate's normal, the static solve's size.
+    let reaction = app.world().get::<SurfaceToolReaction>(ball).unwrap().0;
+    assert_eq!(reaction.held_vertices, 1);
+    let expected = static_force(
+        &triangles,
+        n,
+        &plate_rim(cells, cells),
+        centre,
+        depth as f64,
+        k as f64,
+    );
+    let normal = body.rotation * Vec3::Y;
+    let got = reaction.force.dot(normal) as f64;
+    assert!(
+        (got - expected).abs() <= 0.05 * expected,
+        "force {got} N against the static {expected} N"
+    );
+    assert!((reaction.force - normal * got as f32).length() < 0.01 * got as f32);
+
+    // The mesh asset shows the dent: the centre vertex `depth` down in the body's frame, the
+    // rim where it was.
+    let meshes = app.world().resource::<Assets<Mesh>>();
+    let Some(VertexAttributeValues::Float32x3(positions)) = meshes
+        .get(&mesh)
+        .unwrap()
+        .attribute(Mesh::ATTRIBUTE_POSITION)
+    else {
+        panic!("no positions");
+    };
+    assert!(
+        (positions[centre][1] + depth).abs() < 1e-3,
+        "{:?}",
+        positions[centre]
+    );
+    assert_eq!(positions[0], [-0.5, 0.0, -0.5]);
+}
