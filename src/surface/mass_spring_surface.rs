@@ -6,10 +6,12 @@ use super::filter::{
     dense_weights, neighbour_error_bound, Filter, FilterError, FilterKind, System,
 };
 use crate::math::{Real, Vector};
-use glamx::{DMat3, DVec3};
+use glamx::DVec3;
 use std::collections::HashMap;
 
+mod baraff_witkin;
 mod constraints;
+use baraff_witkin::CgScratch;
 pub use constraints::PointPress;
 use constraints::{constrain, PointHold};
 
@@ -528,6 +530,7 @@ impl MassSpringSurfaceBuilder {
             vertex_edges: Vec::new(),
             held: vec![false; n],
             held_normal: vec![DVec3::ZERO; n],
+            held_forces: Vec::new(),
             any_held: false,
             point_holds: Vec::new(),
         };
@@ -547,14 +550,6 @@ fn check_spring(k: Real, c: Real) -> Result<(), SurfaceError> {
             damping: c as f64,
         })
     }
-}
-
-#[derive(Clone, Debug, Default)]
-struct CgScratch {
-    r: Vec<DVec3>,
-    p: Vec<DVec3>,
-    ap: Vec<DVec3>,
-    blocks: Vec<DMat3>,
 }
 
 /// The paper's deformable surface: a mass-spring-damper mesh integrated by explicit Euler, the
@@ -622,6 +617,8 @@ pub struct MassSpringSurface {
     held: Vec<bool>,
     /// For a sliding hold, the unit normal the holder supports; zero for a full hold.
     held_normal: Vec<DVec3>,
+    /// Forces the holders add on held vertices (friction on a sliding hold), until released.
+    held_forces: Vec<(u32, DVec3)>,
     any_held: bool,
     point_holds: Vec<PointHold>,
 }
@@ -964,6 +961,32 @@ impl MassSpringSurface {
         Ok(())
     }
 
+    /// A sliding hold ([`MassSpringSurface::hold_sliding`]) whose holder also pulls vertex `i`
+    /// with `friction` (N) along the surface until released: kinetic friction of a vertex
+    /// slipping over a tool. The part of `friction` along `normal` is dropped (the hold takes
+    /// it).
+    ///
+    /// # Errors
+    /// [`SurfaceError::VertexOutOfRange`], [`SurfaceError::NonFiniteForce`].
+    pub fn hold_sliding_with_friction(
+        &mut self,
+        i: u32,
+        normal: Vector,
+        friction: Vector,
+    ) -> Result<(), SurfaceError> {
+        self.check_vertex(i)?;
+        if !friction.is_finite() {
+            return Err(SurfaceError::NonFiniteForce);
+        }
+        self.hold_sliding(i, normal)?;
+        self.held_forces.retain(|h| h.0 != i);
+        let f = self.unheld_part(i as usize, friction.as_dvec3());
+        if f != DVec3::ZERO {
+            self.held_forces.push((i, f));
+        }
+        Ok(())
+    }
+
     /// The part of `v` (a force or a velocity change of vertex `i`) its holder leaves free.
     fn unheld_part(&self, i: usize, v: DVec3) -> DVec3 {
         if !self.held[i] {
@@ -980,10 +1003,12 @@ impl MassSpringSurface {
         if let Some(h) = self.held.get_mut(i as usize) {
             *h = false;
         }
+        self.held_forces.retain(|h| h.0 != i);
     }
     /// Releases every held vertex and every held point.
     pub fn release_all(&mut self) {
         self.point_holds.clear();
+        self.held_forces.clear();
         if self.any_held {
             self.held.iter_mut().for_each(|h| *h = false);
             self.any_held = false;
@@ -1104,6 +1129,9 @@ impl MassSpringSurface {
                     self.force[b] -= f;
                 }
             }
+        }
+        for &(i, f) in &self.held_forces {
+            self.force[i as usize] += f;
         }
         if self.any_held {
             for i in 0..self.force.len() {
@@ -1282,140 +1310,6 @@ impl MassSpringSurface {
             probe += self.pos[i].element_sum();
         }
         self.check_probe(probe);
-    }
-
-    /// Baraff-Witkin: `(M - dt² J - dt C) Δv = dt (Fⁿ + dt J vⁿ)` with the exact spring
-    /// Jacobian `J` at `xⁿ`, by conjugate gradients.
-    #[allow(clippy::needless_range_loop)] // CG updates several arrays by the same index
-    fn baraff_witkin_step(&mut self, max_iterations: u32, tolerance: f64) {
-        let dt = self.dt;
-        let nf = self.free.len();
-        // Per-edge Jacobian blocks (PSD part kept for a definite system).
-        let mut blocks = std::mem::take(&mut self.cg.blocks);
-        blocks.clear();
-        for (e, &[a, b]) in self.edges.iter().enumerate() {
-            let jb = match self.model {
-                SpringModel::Linear => DMat3::IDENTITY * self.k[e],
-                SpringModel::Length => {
-                    let d = self.pos[b as usize] - self.pos[a as usize];
-                    let l = d.length();
-                    if l > 0.0 {
-                        let n = d / l;
-                        let nn = DMat3::from_cols(n * n.x, n * n.y, n * n.z);
-                        let t = (1.0 - self.rest[e] / l).max(0.0);
-                        (nn + (DMat3::IDENTITY - nn) * t) * self.k[e]
-                    } else {
-                        DMat3::IDENTITY * self.k[e]
-                    }
-                }
-            };
-            blocks.push(jb);
-        }
-        // Right-hand side.
-        let mut rhs = std::mem::take(&mut self.rhs);
-        for (fi, &v) in self.free.iter().enumerate() {
-            rhs[fi] = self.force[v as usize];
-        }
-        for (e, &[a, b]) in self.edges.iter().enumerate() {
-            let jv = blocks[e] * (self.vel[b as usize] - self.vel[a as usize]) * dt;
-            let (fa, fb) = (self.free_index[a as usize], self.free_index[b as usize]);
-            if fa != NOT_FREE {
-                rhs[fa as usize] += jv;
-            }
-            if fb != NOT_FREE {
-                rhs[fb as usize] -= jv;
-            }
-        }
-        for r in &mut rhs {
-            *r *= dt;
-        }
-        // A x = M x + Σ_e (dt² J_e + dt c_e I)(x_a - x_b) on a, opposite on b.
-        let apply = |x: &[DVec3], out: &mut [DVec3], s: &Self, blocks: &[DMat3]| {
-            for (fi, &v) in s.free.iter().enumerate() {
-                out[fi] = x[fi] * s.mass[v as usize];
-            }
-            for (e, &[a, b]) in s.edges.iter().enumerate() {
-                let (fa, fb) = (s.free_index[a as usize], s.free_index[b as usize]);
-                let xa = if fa != NOT_FREE {
-                    x[fa as usize]
-                } else {
-                    DVec3::ZERO
-                };
-                let xb = if fb != NOT_FREE {
-                    x[fb as usize]
-                } else {
-                    DVec3::ZERO
-                };
-                let y = (blocks[e] * (dt * dt) + DMat3::IDENTITY * (dt * s.c[e])) * (xa - xb);
-                if fa != NOT_FREE {
-                    out[fa as usize] += y;
-                }
-                if fb != NOT_FREE {
-                    out[fb as usize] -= y;
-                }
-            }
-        };
-        let mut x = std::mem::take(&mut self.dv);
-        let mut cg = std::mem::take(&mut self.cg);
-        cg.r.resize(nf, DVec3::ZERO);
-        cg.p.resize(nf, DVec3::ZERO);
-        cg.ap.resize(nf, DVec3::ZERO);
-        // Held vertices: Baraff and Witkin's filtered CG. The held directions are projected
-        // out of the iterate, the residual and the search direction, so the solution has the
-        // holder's velocity there and the rest responds to it as to a pin.
-        let project = |v: &mut [DVec3], s: &Self| {
-            if s.any_held {
-                for (fi, &i) in s.free.iter().enumerate() {
-                    v[fi] = s.unheld_part(i as usize, v[fi]);
-                }
-            }
-        };
-        project(&mut x, self);
-        apply(&x, &mut cg.ap, self, &blocks);
-        for i in 0..nf {
-            cg.r[i] = rhs[i] - cg.ap[i];
-        }
-        project(&mut cg.r, self);
-        cg.p.copy_from_slice(&cg.r);
-        let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
-        let bnorm = dot(&rhs, &rhs).sqrt().max(1e-300);
-        let mut rr = dot(&cg.r, &cg.r);
-        let mut it = 0;
-        while it < max_iterations && rr.sqrt() > tolerance * bnorm {
-            apply(&cg.p, &mut cg.ap, self, &blocks);
-            project(&mut cg.ap, self);
-            let pap = dot(&cg.p, &cg.ap);
-            if pap <= 0.0 || !pap.is_finite() {
-                break;
-            }
-            let alpha = rr / pap;
-            for i in 0..nf {
-                x[i] += cg.p[i] * alpha;
-                cg.r[i] -= cg.ap[i] * alpha;
-            }
-            let rr_new = dot(&cg.r, &cg.r);
-            let beta = rr_new / rr;
-            for i in 0..nf {
-                cg.p[i] = cg.r[i] + cg.p[i] * beta;
-            }
-            rr = rr_new;
-            it += 1;
-        }
-        self.last_cg_iterations = it;
-        let mut probe = 0.0;
-        for (fi, &v) in self.free.iter().enumerate() {
-            let i = v as usize;
-            let dv = self.unheld_part(i, x[fi]);
-            self.vel[i] += dv;
-            self.pos[i] += self.vel[i] * dt;
-            probe += self.pos[i].element_sum();
-        }
-        self.check_probe(probe);
-        // x stays as the next warm start.
-        self.dv = x;
-        self.rhs = rhs;
-        cg.blocks = blocks;
-        self.cg = cg;
     }
 }
 
