@@ -45,7 +45,9 @@
 //! app.add_plugins((MinimalPlugins, TransformPlugin))
 //!     .add_plugins(RapierPhysicsPlugin::<TouchPhysicsHooks>::default())
 //!     .add_plugins(RapierTouchPlugin::default())
-//!     .insert_resource(TimeUpdateStrategy::ManualDuration(std::time::Duration::from_secs_f32(1.0 / 60.0)));
+//!     .insert_resource(TimeUpdateStrategy::ManualDuration(
+//!         std::time::Duration::from_secs_f32(1.0 / 60.0),
+//!     ));
 //!
 //! // Both sides of a guarded pair opt in, as with `TouchPipeline::track_collider`.
 //! app.world_mut().spawn((Collider::cuboid(5.0, 0.01, 5.0), TouchTracked));

@@ -89,8 +89,8 @@ mod touch_diff;
 /// ```
 pub mod prelude {
     pub use crate::coupling::{
-        AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,
-        ToolTouchEvent,
+        AttachOptions, AttachedSurface, CouplingError, Friction, SurfaceHandle, SurfaceSet,
+        ToolReaction, ToolTouchEvent,
     };
     pub use crate::geometry::{
         safe_step_length, ContactConfiguration, ContactKind, ContactPatch, ContactPoint,

@@ -3,6 +3,7 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
+use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{find_contacts, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::ToolShape;
@@ -42,6 +43,8 @@ pub(super) struct ToolMotion {
     pub start: Pose,
     pub end: Pose,
     pub shape: Arc<ToolShape>,
+    /// The tool's friction on this surface.
+    pub friction: Friction,
 }
 
 /// One surface substep: the surface steps, then each tool holds the vertices it contains, then
@@ -79,7 +82,13 @@ pub(super) fn surface_substep(
             .parent()
             .and_then(|b| world.bodies.get(b))
             .is_none_or(|b| !b.is_dynamic());
-        let (force, arm_sum, held) = hold_vertices(
+        let friction = s
+            .pair_friction
+            .get(&t.handle)
+            .copied()
+            .unwrap_or(t.friction);
+        let holds = hold_vertices(
+            (t.handle, friction, &mut s.sticks),
             follow,
             &mut s.surface,
             t.shape.query.as_deref().unwrap_or(tool.shape()),
@@ -91,7 +100,7 @@ pub(super) fn surface_substep(
             &s.scratch,
         );
         let (pf, pm, pn) = reaction_of(&s.last_pressed, t.handle, h);
-        let (force, arm_sum) = (force + pf, arm_sum + pm);
+        let (force, arm_sum) = (holds.force + pf, holds.moment + pm);
         let world_force = body_pose.rotation * force;
         let centre = tool
             .parent()
@@ -107,7 +116,8 @@ pub(super) fn surface_substep(
                 force: world_force,
                 torque,
                 mean_force: world_force,
-                held_vertices: held,
+                held_vertices: holds.count,
+                sticking_vertices: holds.sticking,
                 pressed_points: pn,
             },
         ));
@@ -152,17 +162,27 @@ pub(super) fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
     )
 }
 
-/// Moves every surface vertex the tool contains out of it and holds it there; returns the force
-/// the held vertices push the tool with, `Σ p × f` (surface frame) and how many vertices it
-/// holds.
+/// What one tool's holds give back: the force on the tool, `Σ p × f` (surface frame), how many
+/// vertices it holds and how many of those stick to it.
+pub(super) struct Holds {
+    pub force: Vector,
+    pub moment: Vector,
+    pub count: usize,
+    pub sticking: usize,
+}
+
+/// Moves every surface vertex the tool contains out of it and holds it there (see [`Holds`]).
 ///
 /// A vertex that just entered is walked back along its inverse trajectory relative to the tool
 /// (eq. 1-2 for one vertex): from where it is, back along its own motion over the substep minus
 /// the tool's, to the tool's boundary. A vertex already in contact slides: it is snapped to the
-/// nearest boundary point. The contact is frictionless: a held vertex keeps its own tangential
-/// velocity and takes the tool's normal velocity.
+/// nearest boundary point, keeps its own tangential velocity and takes the tool's normal
+/// velocity. With friction ([`super::friction`]) a vertex that sticks is carried by the tool's
+/// material point it stuck to, with that point's whole velocity, until its tangential force
+/// passes the static limit; a slipping vertex is pulled back by kinetic friction.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hold_vertices(
+    (tool, friction, sticks): (ColliderHandle, Friction, &mut Sticks),
     follow: bool,
     surface: &mut MassSpringSurface,
     shape: &dyn parry3d::shape::Shape,
@@ -172,16 +192,25 @@ pub(super) fn hold_vertices(
     prev_positions: &[Vector],
     was_held: &[bool],
     positions: &[Vector],
-) -> (Vector, Vector, usize) {
+) -> Holds {
     let aabb: Aabb = shape.compute_aabb(pose);
     let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
     let margin = 1e-6 * (1.0 + aabb.extents().max_element());
     let motion = pose.translation - before.translation;
+    // The velocity of the tool's material point at `local` (tool frame) over the substep.
+    let material_velocity = |local: Vector| {
+        if h > 0.0 {
+            (pose.transform_point(local) - before.transform_point(local)) / h
+        } else {
+            Vector::ZERO
+        }
+    };
     // A vertex held in the last substep moved on with the tool's old normal velocity; when the
     // tool slowed down or turned back, that leaves it outside by up to the relative motion over
     // the substep. It is still in contact (and snapped back) unless its springs pull it away
     // (the push-only test below).
-    let mut held = Vec::new();
+    // (vertex, normal, contact point in the tool's frame, stuck in the last substep)
+    let mut held: Vec<(u32, Vector, Vector, bool)> = Vec::new();
     // (vertex, its free position and velocity) for vertices that followed the tool.
     let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
     for (i, p) in positions.iter().enumerate() {
@@ -209,41 +238,62 @@ pub(super) fn hold_vertices(
             }
             followed.push((iu, *p, surface.velocity(iu)));
         }
-        let nearest = nearest_on_boundary(shape, pose, *p);
-        let out = if entering && rel.length() > (nearest - *p).length() + margin {
-            exit_along(shape, pose, *p, rel.normalize()).unwrap_or(nearest)
-        } else {
-            nearest
+        // A vertex stuck to this tool stays on the material point it stuck to.
+        let stuck = match sticks.get(&iu) {
+            Some(&(t, Contact::Stuck(anchor))) if t == tool && !entering => Some(anchor),
+            _ => None,
+        };
+        let (out, local) = match stuck {
+            Some(anchor) => (pose.transform_point(anchor), anchor),
+            None => {
+                let nearest = nearest_on_boundary(shape, pose, *p);
+                let out = if entering && rel.length() > (nearest - *p).length() + margin {
+                    exit_along(shape, pose, *p, rel.normalize()).unwrap_or(nearest)
+                } else {
+                    nearest
+                };
+                (out, pose.inverse_transform_point(out))
+            }
         };
         if !out.is_finite() {
             continue;
         }
         // The tool's outward normal at the contact point.
-        let local = pose.inverse_transform_point(out);
         let n = pose.rotation * outward_normal(shape, local, margin);
-        // Frictionless: the tool sets the normal velocity only (that of the tool's material
-        // point under the vertex, rotation included).
-        let tool_velocity = if h > 0.0 {
-            (out - before.transform_point(local)) / h
+        let tool_velocity = material_velocity(local);
+        let (v, hold) = if stuck.is_some() {
+            (tool_velocity, surface.set_state(iu, out, tool_velocity))
         } else {
-            Vector::ZERO
+            // Sliding: the tool sets the normal velocity only.
+            let v_own = surface.velocity(iu);
+            let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
+            (v, surface.set_state(iu, out, v))
         };
-        let v_own = surface.velocity(iu);
-        let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
-        if surface.set_state(iu, out, v).is_ok() {
-            let _ = surface.hold_sliding(iu, n);
-            held.push((iu, n));
+        if hold.is_ok() && v.is_finite() {
+            let _ = if stuck.is_some() {
+                surface.hold(iu)
+            } else {
+                surface.hold_sliding(iu, n)
+            };
+            held.push((iu, n, local, stuck.is_some()));
         }
     }
     // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
-    // stick to a receding tool) is let go. The tool receives the normal part of the others'
-    // spring and damper forces (the tangential part slides them).
-    let mut force = Vector::ZERO;
-    let mut moment = Vector::ZERO;
-    let mut count = 0;
-    for &(i, n) in &held {
-        let f = surface.internal_force(i).dot(n);
-        if f >= 0.0 {
+    // stick to a receding tool) is let go. The others stick or slip (friction), and the tool
+    // receives their spring and damper forces: the normal part, and the tangential part of
+    // those that stick, or kinetic friction for those that slip.
+    let mut out = Holds {
+        force: Vector::ZERO,
+        moment: Vector::ZERO,
+        count: 0,
+        sticking: 0,
+    };
+    // A vertex moving over the tool slower than this (a millionth of the tool's size per
+    // substep) is at rest on it.
+    let slip_eps = if h > 0.0 { margin / h } else { Real::MAX };
+    for &(i, n, local, was_stuck) in &held {
+        let f = surface.internal_force(i);
+        if f.dot(n) >= 0.0 {
             surface.release(i);
             // A vertex that only followed the tool separates where its own motion took it.
             if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
@@ -251,12 +301,37 @@ pub(super) fn hold_vertices(
             }
             continue;
         }
-        let f = n * f;
-        force += f;
-        moment += surface.position(i).cross(f);
-        count += 1;
+        let was = sticks
+            .get(&i)
+            .filter(|s| s.0 == tool && !friction.is_frictionless())
+            .map(|s| s.1);
+        let relative = surface.velocity(i) - material_velocity(local);
+        let slip = relative - n * relative.dot(n);
+        let (on_tool, next) = settle(friction, f, n, was, slip, slip_eps);
+        match next {
+            Settled::Stick => {
+                if !was_stuck {
+                    // From now on carried by the material point it touches.
+                    let _ = surface.set_state(i, surface.position(i), material_velocity(local));
+                    let _ = surface.hold(i);
+                }
+                sticks.insert(i, (tool, Contact::Stuck(local)));
+                out.sticking += 1;
+            }
+            Settled::Slip { on_vertex, dir } => {
+                let _ = surface.hold_sliding_with_friction(i, n, on_vertex);
+                if !friction.is_frictionless() {
+                    sticks.insert(i, (tool, Contact::Slipping(dir)));
+                }
+            }
+        }
+        out.force += on_tool;
+        out.moment += surface.position(i).cross(on_tool);
+        out.count += 1;
     }
-    (force, moment, count)
+    // This tool's contacts end where it let the vertex go.
+    sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));
+    out
 }
 
 /// The outward normal of `shape` at `local`, a point on its boundary (shape frame).

@@ -3,12 +3,14 @@
 //! tools press into them, and returns each tool's reaction force (two-way for dynamic tools).
 
 mod events;
+mod friction;
 mod holding;
 mod pressing;
 mod surface_set;
 mod tool_shape;
 
 pub use events::ToolTouchEvent;
+pub use friction::Friction;
 
 pub use surface_set::{
     AttachOptions, AttachedSurface, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction,

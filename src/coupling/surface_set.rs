@@ -1,6 +1,7 @@
 //! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
 
 use super::events::{ToolTouchEvent, TouchTracker};
+use super::friction::{Friction, Sticks};
 use super::holding::{attached_with_pose, lerp_pose, surface_substep, ToolMotion};
 use super::pressing::Pressed;
 use super::tool_shape::ToolShape;
@@ -37,6 +38,18 @@ pub enum CouplingError {
     /// The tool's shape has no size (its bounding box has no extent), so it could hold nothing.
     #[error("the tool's shape has no size")]
     ZeroSizeTool,
+    /// The surface handle is stale (the surface was removed).
+    #[error("no such surface")]
+    NoSuchSurface,
+    /// A friction coefficient is negative or not finite, or the dynamic one is above the
+    /// static one.
+    #[error("invalid friction: static {static_coefficient}, dynamic {dynamic_coefficient}")]
+    InvalidFriction {
+        /// The static coefficient given.
+        static_coefficient: f64,
+        /// The dynamic coefficient given.
+        dynamic_coefficient: f64,
+    },
     /// parry rejected the surface's triangle mesh.
     #[error("the surface mesh cannot be a collider: {0}")]
     Collider(String),
@@ -110,6 +123,9 @@ pub struct ToolReaction {
     pub mean_force: Vector,
     /// Number of surface vertices the tool holds.
     pub held_vertices: usize,
+    /// How many of those stick to it (with friction, [`SurfaceSet::set_tool_friction`]); the
+    /// others slide.
+    pub sticking_vertices: usize,
     /// Number of surface points a polyhedral tool's vertices and edges pressed between the
     /// surface's vertices (inside triangles, on edges) during the last substep.
     pub pressed_points: usize,
@@ -130,6 +146,10 @@ pub struct AttachedSurface {
     pub(super) last_pressed: Vec<Pressed>,
     pub(super) candidates: Vec<u32>,
     pub(super) contacts: Vec<SurfaceContact>,
+    /// Vertices stuck to a tool (friction).
+    pub(super) sticks: Sticks,
+    /// Friction of given tools on this surface, in place of the tool's own.
+    pub(super) pair_friction: HashMap<ColliderHandle, Friction>,
 }
 
 impl std::fmt::Debug for AttachedSurface {
@@ -177,6 +197,8 @@ struct ToolState {
     had_surface_group: bool,
     /// The tool's shape as the coupling uses it.
     shape: Arc<ToolShape>,
+    /// Its friction on the surfaces (unless a surface has its own for it).
+    friction: Friction,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -186,13 +208,18 @@ struct ToolState {
 /// tools' poses are interpolated between the start and the end of the rigid step, expressed in
 /// the surface body's frame, and every surface vertex a tool contains is moved out along the
 /// tool's own motion over the substep (the vertex form of the inverse trajectory mapping, eq.
-/// 1-2), or to the nearest tool surface point when the tool did not move. The contact is
-/// frictionless: the vertex takes the tool's normal velocity and is held along the tool's
-/// normal only ([`MassSpringSurface::hold_sliding`]), so it slides over the tool under the
-/// tangential part of its forces. A held vertex stays in contact when the tool slows down or
-/// turns back (it is snapped back onto the tool) until its springs pull it away from the tool.
-/// The filter then spreads that deformation over the next substep. The reaction on a tool is
-/// the sum of the normal parts of the spring and damper forces of the vertices it holds.
+/// 1-2), or to the nearest tool surface point when the tool did not move. By default the
+/// contact is frictionless: the vertex takes the tool's normal velocity and is held along the
+/// tool's normal only ([`MassSpringSurface::hold_sliding`]), so it slides over the tool under
+/// the tangential part of its forces. With Coulomb friction ([`SurfaceSet::set_tool_friction`],
+/// [`super::Friction`]) a vertex sticks to the tool's material point (held on all axes, carried
+/// by the tool) while its tangential force is within the static limit, and slips against
+/// kinetic friction beyond it; the tool receives the tangential force too. A held vertex stays
+/// in contact when the tool slows down or turns back (it is snapped back onto the tool) until
+/// its springs pull it away from the tool. The filter then spreads that deformation over the
+/// next substep. The reaction on a tool is the sum of the spring and damper forces of the
+/// vertices it holds: their normal parts, and the tangential parts of those that stick or
+/// kinetic friction for those that slip.
 /// Dynamic tools carry the substep-averaged reaction as a rapier force through the next rigid
 /// step (one step of lag), and surface colliders are updated once per rigid step
 /// (`TriMesh::set_vertices`, a BVH refit).
@@ -346,6 +373,8 @@ impl SurfaceSet {
             pressed: Vec::new(),
             last_pressed: Vec::new(),
             candidates: Vec::new(),
+            sticks: Sticks::default(),
+            pair_friction: HashMap::default(),
             contacts: Vec::new(),
             scratch: verts,
         };
@@ -444,6 +473,7 @@ impl SurfaceSet {
                 haptic_prev: None,
                 had_surface_group,
                 shape,
+                friction: Friction::NONE,
             },
         );
         Ok(())
@@ -458,6 +488,10 @@ impl SurfaceSet {
         let Some(state) = self.tools.remove(&tool) else {
             return;
         };
+        for s in self.entries.iter_mut().filter_map(|e| e.1.as_mut()) {
+            s.sticks.retain(|_, st| st.0 != tool);
+            s.pair_friction.remove(&tool);
+        }
         let Some(c) = world.colliders.get_mut(tool) else {
             return;
         };
@@ -524,6 +558,59 @@ impl SurfaceSet {
         self.touch.drain()
     }
 
+    /// Sets the Coulomb friction of registered tool `tool` on every surface (that has no
+    /// friction of its own for it, [`SurfaceSet::set_pair_friction`]). Tools start
+    /// frictionless. Friction acts where the tool holds surface vertices (see
+    /// [`super::Friction`]); the points a polyhedral tool presses between vertices stay
+    /// frictionless.
+    ///
+    /// # Errors
+    /// [`CouplingError::NoSuchCollider`] when `tool` is not a registered tool,
+    /// [`CouplingError::InvalidFriction`] for bad coefficients; nothing changes then.
+    pub fn set_tool_friction(
+        &mut self,
+        tool: ColliderHandle,
+        friction: Friction,
+    ) -> Result<(), CouplingError> {
+        friction.check()?;
+        let t = self
+            .tools
+            .get_mut(&tool)
+            .ok_or(CouplingError::NoSuchCollider)?;
+        t.friction = friction;
+        Ok(())
+    }
+
+    /// Sets the friction of registered tool `tool` on surface `surface` only, in place of the
+    /// tool's own ([`SurfaceSet::set_tool_friction`]).
+    ///
+    /// # Errors
+    /// [`CouplingError::NoSuchSurface`] for a removed surface, [`CouplingError::NoSuchCollider`]
+    /// when `tool` is not a registered tool, [`CouplingError::InvalidFriction`].
+    pub fn set_pair_friction(
+        &mut self,
+        surface: SurfaceHandle,
+        tool: ColliderHandle,
+        friction: Friction,
+    ) -> Result<(), CouplingError> {
+        friction.check()?;
+        if !self.tools.contains_key(&tool) {
+            return Err(CouplingError::NoSuchCollider);
+        }
+        let s = self.get_mut(surface).ok_or(CouplingError::NoSuchSurface)?;
+        s.pair_friction.insert(tool, friction);
+        Ok(())
+    }
+
+    /// The friction of `tool` on `surface`: the pair's own, else the tool's
+    /// ([`Friction::NONE`] for an unknown tool).
+    pub fn friction(&self, surface: SurfaceHandle, tool: ColliderHandle) -> Friction {
+        self.get(surface)
+            .and_then(|s| s.pair_friction.get(&tool).copied())
+            .or_else(|| self.tools.get(&tool).map(|t| t.friction))
+            .unwrap_or(Friction::NONE)
+    }
+
     /// The reaction on `tool` after the last step.
     pub fn tool_reaction(&self, tool: ColliderHandle) -> Option<ToolReaction> {
         self.tools.get(&tool).map(|t| t.reaction)
@@ -546,7 +633,7 @@ impl SurfaceSet {
         let state = self.tools.get_mut(&tool)?;
         let start = state.haptic_prev.unwrap_or(device);
         state.haptic_prev = Some(device);
-        let shape = state.shape.clone();
+        let (shape, friction) = (state.shape.clone(), state.friction);
         let others: Vec<ToolMotion> = self
             .tools
             .iter()
@@ -558,6 +645,7 @@ impl SurfaceSet {
                     start: p,
                     end: p,
                     shape: t.shape.clone(),
+                    friction: t.friction,
                 })
             })
             .chain(std::iter::once(ToolMotion {
@@ -565,6 +653,7 @@ impl SurfaceSet {
                 start,
                 end: device,
                 shape,
+                friction,
             }))
             .collect();
         let mut total = ToolReaction::default();
@@ -576,6 +665,7 @@ impl SurfaceSet {
                     total.torque += r.torque;
                     total.mean_force += r.force;
                     total.held_vertices += r.held_vertices;
+                    total.sticking_vertices += r.sticking_vertices;
                     total.pressed_points += r.pressed_points;
                 }
             }
@@ -631,6 +721,7 @@ impl SurfaceSet {
                     start: t.prev.unwrap_or(now),
                     end: now,
                     shape: t.shape.clone(),
+                    friction: t.friction,
                 })
             })
             .collect();
@@ -649,6 +740,7 @@ impl SurfaceSet {
                         start: lerp_pose(&t.start, &t.end, a_prev),
                         end: lerp_pose(&t.start, &t.end, a),
                         shape: t.shape.clone(),
+                        friction: t.friction,
                     })
                     .collect();
                 for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {
@@ -663,6 +755,7 @@ impl SurfaceSet {
                             t.reaction.force += r.force;
                             t.reaction.torque += r.torque;
                             t.reaction.held_vertices += r.held_vertices;
+                            t.reaction.sticking_vertices += r.sticking_vertices;
                             t.reaction.pressed_points += r.pressed_points;
                         }
                     }

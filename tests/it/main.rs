@@ -7,6 +7,7 @@ mod coupling;
 mod curved_reconstruction;
 mod every_scale;
 mod fig4;
+mod friction;
 mod gltf_input;
 mod main_loop;
 mod mesh_inputs;

@@ -1,0 +1,259 @@
+//! Coulomb friction between a tool and a soft surface (issue 13 item 5), against static
+//! solves of the plate's springs written here: a flat-bottomed tool pressed into a clamped
+//! plate and dragged sideways either carries the vertex under it (below the static limit: the
+//! vertex sits where the tool put it, and the tool feels the static spring force, normal and
+//! tangential) or slides over it (the tool feels kinetic friction, and the vertex comes to rest
+//! where its springs balance it: `|F_t| = μd F_n` for `μs = μd`, within `[μd, μs] F_n` after
+//! stick-slip otherwise).
+
+use crate::common::{dirichlet_solve, edge_laplacian};
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::surface::meshing::{plate, plate_rim};
+
+const CELLS: u32 = 10; // 11 x 11 vertices, 0.1 m apart on a 1 m plate
+const K: f32 = 100.0;
+/// The centre vertex, at the origin.
+const CENTRE: u32 = (CELLS / 2) * (CELLS + 1) + CELLS / 2;
+
+/// A clamped plate (linear springs: the static solution splits by axis) on a fixed body, and a
+/// kinematic cube of half-size `half` whose bottom face starts 5 cm above the centre vertex.
+fn scene(
+    friction: Friction,
+    half: f32,
+    substeps: u32,
+) -> (
+    PhysicsWorld,
+    SurfaceSet,
+    SurfaceHandle,
+    RigidBodyHandle,
+    ColliderHandle,
+) {
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
+    let body = world.insert_body(RigidBodyBuilder::fixed());
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, CELLS, CELLS))
+        .stiffness(K)
+        .damping(1.0)
+        .mass(MassDistribution::PerVertex(0.01))
+        .pinned(plate_rim(CELLS, CELLS))
+        .build()
+        .unwrap();
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps,
+        collider: true,
+    };
+    let h = set.insert(surface, body, &mut world, options).unwrap();
+    let tool_body = world.insert_body(
+        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
+            0.0,
+            half + 0.05,
+            0.0,
+        )),
+    );
+    let tool = world.insert_collider(ColliderBuilder::cuboid(half, half, half), Some(tool_body));
+    set.add_tool(tool, &mut world).unwrap();
+    set.set_tool_friction(tool, friction).unwrap();
+    (world, set, h, tool_body, tool)
+}
+
+/// Moves the tool's bottom-face centre through `waypoints` (each reached in `steps` linear
+/// steps), then holds it for `hold` steps.
+fn drive(
+    world: &mut PhysicsWorld,
+    set: &mut SurfaceSet,
+    body: RigidBodyHandle,
+    half: f32,
+    waypoints: &[Vector],
+    steps: usize,
+    hold: usize,
+) {
+    let mut from = world.bodies[body].translation() - Vector::Y * half;
+    for &to in waypoints {
+        for s in 1..=steps {
+            let p = from.lerp(to, s as f32 / steps as f32);
+            world.bodies[body].set_next_kinematic_translation(p + Vector::Y * half);
+            set.step(world);
+        }
+        from = to;
+    }
+    for _ in 0..hold {
+        set.step(world);
+    }
+}
+
+/// The static spring force on the tool when the centre vertex alone is displaced by `u` (the
+/// rim pinned, the rest in equilibrium): `-(L u)_c` per axis (linear springs).
+fn static_force(u: Vector) -> Vector {
+    let mesh = plate(1.0, 1.0, CELLS, CELLS);
+    let n = mesh.vertices.len();
+    let lap = edge_laplacian(&mesh.triangles, n, K as f64);
+    let rim = plate_rim(CELLS, CELLS);
+    let known: Vec<bool> = (0..n as u32)
+        .map(|i| i == CENTRE || rim.contains(&i))
+        .collect();
+    let c = CENTRE as usize;
+    let per_axis = |d: f32| {
+        let mut x = vec![0.0; n];
+        x[c] = d as f64;
+        dirichlet_solve(&lap, &known, &mut x);
+        -(0..n).map(|j| lap[(c, j)] * x[j]).sum::<f64>() as f32
+    };
+    Vector::new(per_axis(u.x), per_axis(u.y), per_axis(u.z))
+}
+
+#[test]
+fn below_the_static_limit_the_tool_carries_the_surface() {
+    // Pressed 1 cm, dragged 5 mm: a tangential load half the normal one, under μs = 0.8.
+    let (depth, drag, half) = (0.01, 0.005, 0.04);
+    for substeps in [1, 8] {
+        let friction = Friction::new(0.8, 0.6).unwrap();
+        let (mut world, mut set, h, body, tool) = scene(friction, half, substeps);
+        let pressed = Vector::new(0.0, -depth, 0.0);
+        let dragged = Vector::new(drag, -depth, 0.0);
+        drive(
+            &mut world,
+            &mut set,
+            body,
+            half,
+            &[pressed, dragged],
+            30,
+            240,
+        );
+
+        let surface = &set.get(h).unwrap().surface;
+        let r = set.tool_reaction(tool).unwrap();
+        assert_eq!(
+            (r.held_vertices, r.sticking_vertices),
+            (1, 1),
+            "{substeps} substeps"
+        );
+        // The vertex went where the tool carried it.
+        let u = surface.displacement(CENTRE);
+        assert!(
+            (u - dragged).length() < 2e-4,
+            "{substeps} substeps: displacement {u}"
+        );
+        // The tool feels the static spring force of that displacement, both components.
+        let expected = static_force(dragged);
+        assert!(
+            (r.force - expected).length() <= 0.05 * expected.length(),
+            "{substeps} substeps: force {} against the static {expected}",
+            r.force
+        );
+        assert!(r.force.x < 0.0 && r.force.y > 0.0); // pulled back, pushed up
+    }
+}
+
+#[test]
+fn beyond_it_the_tool_slides_against_kinetic_friction() {
+    // Pressed 1 cm and dragged 4 cm: far past the static limit of μs = 0.3.
+    let (depth, drag, half) = (0.01, 0.04, 0.06);
+    for (mu_s, mu_d) in [(0.2, 0.2), (0.5, 0.5), (0.3, 0.2), (0.25, 0.1)] {
+        let friction = Friction::new(mu_s, mu_d).unwrap();
+        let (mut world, mut set, h, body, tool) = scene(friction, half, 8);
+        let pressed = Vector::new(0.0, -depth, 0.0);
+        let end = Vector::new(drag, -depth, 0.0);
+        // Slowly (2 mm/s over 20 s): the slide is quasi-static.
+        drive(&mut world, &mut set, body, half, &[pressed], 30, 60);
+        let mut slid = false;
+        let steps = 1200;
+        for s in 1..=steps {
+            let p = pressed.lerp(end, s as f32 / steps as f32);
+            world.bodies[body].set_next_kinematic_translation(p + Vector::Y * half);
+            set.step(&mut world);
+            let r = set.tool_reaction(tool).unwrap();
+            if s > steps / 2 {
+                // Sliding: the tool's tangential force is kinetic friction of its normal force.
+                assert_eq!(r.held_vertices, 1);
+                slid |= r.sticking_vertices == 0;
+                if r.sticking_vertices == 0 {
+                    let tangential = Vector::new(r.force.x, 0.0, r.force.z).length();
+                    assert!(
+                        (tangential - mu_d * r.force.y).abs() <= 0.05 * mu_d * r.force.y,
+                        "μ {mu_s}/{mu_d}: tangential {tangential} N, normal {} N",
+                        r.force.y
+                    );
+                }
+            }
+        }
+        assert!(slid, "μ {mu_s}/{mu_d}: the vertex never slid");
+        for _ in 0..120 {
+            set.step(&mut world);
+        }
+        // At rest the vertex sits where Coulomb's law let it stop, checked independently of the
+        // coupling's bookkeeping by the static solve at its displacement: where its springs
+        // balance kinetic friction (|F_t| = μd F_n) when μs = μd; with μs > μd it stops
+        // somewhere in a stick-slip cycle, μd F_n ≤ |F_t| ≤ μs F_n.
+        let u = set.get(h).unwrap().surface.displacement(CENTRE);
+        assert!((u.y + depth).abs() < 2e-4, "on the tool's face: {u}");
+        assert!(u.x > 0.0 && u.x < drag, "carried part of the way: {u}");
+        let f = static_force(u);
+        let ratio = f.x.abs() / f.y;
+        eprintln!("μ {mu_s}/{mu_d}: rests at {ratio}");
+        if mu_s == mu_d {
+            assert!(
+                (ratio - mu_d).abs() <= 0.05 * mu_d,
+                "μ {mu_s}/{mu_d}: rests at |F_t| / F_n = {ratio}"
+            );
+        } else {
+            assert!(
+                ratio >= 0.95 * mu_d && ratio <= 1.05 * mu_s,
+                "μ {mu_s}/{mu_d}: rests at |F_t| / F_n = {ratio}"
+            );
+        }
+        // The tool feels that force.
+        let r = set.tool_reaction(tool).unwrap();
+        assert!(
+            (r.force - f).length() <= 0.05 * f.length(),
+            "{} vs {f}",
+            r.force
+        );
+    }
+}
+
+#[test]
+fn friction_is_validated_and_frictionless_tools_slide() {
+    assert!(Friction::new(f32::NAN, 0.0).is_err());
+    assert!(Friction::new(0.5, f32::INFINITY).is_err());
+    assert!(Friction::new(0.5, -0.1).is_err());
+    assert!(Friction::new(0.2, 0.3).is_err());
+    let (mut world, mut set, h, body, tool) = scene(Friction::NONE, 0.06, 8);
+    let bad = Friction {
+        static_coefficient: -1.0,
+        dynamic_coefficient: 0.0,
+    };
+    assert!(matches!(
+        set.set_tool_friction(tool, bad),
+        Err(CouplingError::InvalidFriction { .. })
+    ));
+    assert!(matches!(
+        set.set_pair_friction(h, tool, bad),
+        Err(CouplingError::InvalidFriction { .. })
+    ));
+    assert_eq!(set.friction(h, tool), Friction::NONE);
+    // Frictionless, the same drag leaves the vertex under the tool's face with no tangential
+    // force: it slid back to where its springs have no tangential pull.
+    let (depth, half) = (0.01, 0.06);
+    let pressed = Vector::new(0.0, -depth, 0.0);
+    drive(
+        &mut world,
+        &mut set,
+        body,
+        half,
+        &[pressed, Vector::new(0.04, -depth, 0.0)],
+        60,
+        240,
+    );
+    let r = set.tool_reaction(tool).unwrap();
+    assert_eq!(r.sticking_vertices, 0);
+    assert!(r.force.x.abs() < 1e-3 * r.force.y, "{}", r.force);
+    assert!(set.get(h).unwrap().surface.displacement(CENTRE).x.abs() < 1e-4);
+    // A pair's own friction overrides the tool's.
+    let grip = Friction::new(1.0, 1.0).unwrap();
+    set.set_pair_friction(h, tool, grip).unwrap();
+    assert_eq!(set.friction(h, tool), grip);
+}
