@@ -45,6 +45,8 @@ pub(super) struct ToolMotion {
     pub shape: Arc<ToolShape>,
     /// The tool's friction on this surface.
     pub friction: Friction,
+    /// Whether the tool grasps what it touches (bilateral contacts).
+    pub grasp: bool,
 }
 
 /// One surface substep: the surface steps, then each tool holds the vertices it contains, then
@@ -88,7 +90,7 @@ pub(super) fn surface_substep(
             .copied()
             .unwrap_or(t.friction);
         let holds = hold_vertices(
-            (t.handle, friction, &mut s.sticks),
+            (t.handle, friction, t.grasp, &mut s.sticks),
             follow,
             &mut s.surface,
             t.shape.query.as_deref().unwrap_or(tool.shape()),
@@ -179,10 +181,11 @@ pub(super) struct Holds {
 /// nearest boundary point, keeps its own tangential velocity and takes the tool's normal
 /// velocity. With friction ([`super::friction`]) a vertex that sticks is carried by the tool's
 /// material point it stuck to, with that point's whole velocity, until its tangential force
-/// passes the static limit; a slipping vertex is pulled back by kinetic friction.
+/// passes the static limit; a slipping vertex is pulled back by kinetic friction. A grasping
+/// tool keeps every vertex it touches stuck, pulled or pushed, until it lets go.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hold_vertices(
-    (tool, friction, sticks): (ColliderHandle, Friction, &mut Sticks),
+    (tool, friction, grasp, sticks): (ColliderHandle, Friction, bool, &mut Sticks),
     follow: bool,
     surface: &mut MassSpringSurface,
     shape: &dyn parry3d::shape::Shape,
@@ -293,6 +296,19 @@ pub(super) fn hold_vertices(
     let slip_eps = if h > 0.0 { margin / h } else { Real::MAX };
     for &(i, n, local, was_stuck) in &held {
         let f = surface.internal_force(i);
+        if grasp {
+            // Grasped: stuck whatever its springs do, pulled or pushed; the tool feels it all.
+            if !was_stuck {
+                let _ = surface.set_state(i, surface.position(i), material_velocity(local));
+                let _ = surface.hold(i);
+            }
+            sticks.insert(i, (tool, Contact::Stuck(local)));
+            out.sticking += 1;
+            out.force += f;
+            out.moment += surface.position(i).cross(f);
+            out.count += 1;
+            continue;
+        }
         if f.dot(n) >= 0.0 {
             surface.release(i);
             // A vertex that only followed the tool separates where its own motion took it.

@@ -199,6 +199,8 @@ struct ToolState {
     shape: Arc<ToolShape>,
     /// Its friction on the surfaces (unless a surface has its own for it).
     friction: Friction,
+    /// Whether it grasps what it touches.
+    grasp: bool,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -474,6 +476,7 @@ impl SurfaceSet {
                 had_surface_group,
                 shape,
                 friction: Friction::NONE,
+                grasp: false,
             },
         );
         Ok(())
@@ -602,6 +605,67 @@ impl SurfaceSet {
         Ok(())
     }
 
+    /// Makes registered tool `tool` grasp (`true`) or let go (`false`). While it grasps, every
+    /// surface vertex it holds, or comes to hold, sticks to its material point whether the
+    /// surface pushes or pulls it (a bilateral contact): lifting the tool lifts a fold of the
+    /// surface, and the tool's reaction includes the springs' pull. Let go, the vertices the
+    /// springs pull off the tool are released at the next substep. A kinematic tool (or one with
+    /// no body) carries what it grasps; a dynamic tool is not chased by the vertices.
+    ///
+    /// # Example
+    /// A ball pressed 1 cm into a clamped plate, made to grasp, and lifted 3 cm: it pulls the
+    /// plate's centre up with it and feels the springs pull it down.
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::rapier3d::prelude::*;
+    /// use rapier_touch::surface::meshing::{plate, plate_rim};
+    ///
+    /// let mut world = PhysicsWorld { gravity: Vector::ZERO, ..Default::default() };
+    /// let fixed = world.insert_body(RigidBodyBuilder::fixed());
+    /// let surface = MassSpringSurfaceBuilder::from_mesh(&plate(0.4, 0.4, 4, 4))
+    ///     .pinned(plate_rim(4, 4))
+    ///     .build()
+    ///     .unwrap();
+    /// let mut set = SurfaceSet::new();
+    /// let options = AttachOptions { substeps: 4, collider: true };
+    /// let plate = set.insert(surface, fixed, &mut world, options).unwrap();
+    /// let ball = world.insert_body(
+    ///     RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, 0.05, 0.0)),
+    /// );
+    /// let tool = world.insert_collider(ColliderBuilder::ball(0.02), Some(ball));
+    /// set.add_tool(tool, &mut world).unwrap();
+    /// let mut go = |world: &mut PhysicsWorld, set: &mut SurfaceSet, y: f32| {
+    ///     for _ in 0..30 {
+    ///         world.bodies[ball].set_next_kinematic_translation(Vector::new(0.0, y, 0.0));
+    ///         set.step(world);
+    ///     }
+    /// };
+    /// go(&mut world, &mut set, 0.01); // its bottom 1 cm into the plate
+    /// set.set_grasp(tool, true).unwrap();
+    /// go(&mut world, &mut set, 0.05); // lifted: its bottom 3 cm above the plate
+    /// assert!(set.get(plate).unwrap().surface.displacement(12).y > 0.029);
+    /// assert!(set.tool_reaction(tool).unwrap().force.y < 0.0); // pulled down
+    /// set.set_grasp(tool, false).unwrap();
+    /// go(&mut world, &mut set, 0.05);
+    /// assert_eq!(set.tool_reaction(tool).unwrap().held_vertices, 0); // let go
+    /// ```
+    ///
+    /// # Errors
+    /// [`CouplingError::NoSuchCollider`] when `tool` is not a registered tool.
+    pub fn set_grasp(&mut self, tool: ColliderHandle, grasp: bool) -> Result<(), CouplingError> {
+        let t = self
+            .tools
+            .get_mut(&tool)
+            .ok_or(CouplingError::NoSuchCollider)?;
+        t.grasp = grasp;
+        Ok(())
+    }
+
+    /// Whether `tool` grasps ([`SurfaceSet::set_grasp`]).
+    pub fn is_grasping(&self, tool: ColliderHandle) -> bool {
+        self.tools.get(&tool).is_some_and(|t| t.grasp)
+    }
+
     /// The friction of `tool` on `surface`: the pair's own, else the tool's
     /// ([`Friction::NONE`] for an unknown tool).
     pub fn friction(&self, surface: SurfaceHandle, tool: ColliderHandle) -> Friction {
@@ -633,7 +697,7 @@ impl SurfaceSet {
         let state = self.tools.get_mut(&tool)?;
         let start = state.haptic_prev.unwrap_or(device);
         state.haptic_prev = Some(device);
-        let (shape, friction) = (state.shape.clone(), state.friction);
+        let (shape, friction, grasp) = (state.shape.clone(), state.friction, state.grasp);
         let others: Vec<ToolMotion> = self
             .tools
             .iter()
@@ -646,6 +710,7 @@ impl SurfaceSet {
                     end: p,
                     shape: t.shape.clone(),
                     friction: t.friction,
+                    grasp: t.grasp,
                 })
             })
             .chain(std::iter::once(ToolMotion {
@@ -654,6 +719,7 @@ impl SurfaceSet {
                 end: device,
                 shape,
                 friction,
+                grasp,
             }))
             .collect();
         let mut total = ToolReaction::default();
@@ -722,6 +788,7 @@ impl SurfaceSet {
                     end: now,
                     shape: t.shape.clone(),
                     friction: t.friction,
+                    grasp: t.grasp,
                 })
             })
             .collect();
@@ -741,6 +808,7 @@ impl SurfaceSet {
                         end: lerp_pose(&t.start, &t.end, a),
                         shape: t.shape.clone(),
                         friction: t.friction,
+                        grasp: t.grasp,
                     })
                     .collect();
                 for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {

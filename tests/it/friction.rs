@@ -1,10 +1,12 @@
-//! Coulomb friction between a tool and a soft surface (issue 13 item 5), against static
+//! Coulomb friction and grasping between a tool and a soft surface (issue 13 items 5 and 6),
+//! against static
 //! solves of the plate's springs written here: a flat-bottomed tool pressed into a clamped
 //! plate and dragged sideways either carries the vertex under it (below the static limit: the
 //! vertex sits where the tool put it, and the tool feels the static spring force, normal and
 //! tangential) or slides over it (the tool feels kinetic friction, and the vertex comes to rest
 //! where its springs balance it: `|F_t| = μd F_n` for `μs = μd`, within `[μd, μs] F_n` after
-//! stick-slip otherwise).
+//! stick-slip otherwise). A grasping tool lifts the vertex with it, feels the fold's static pull,
+//! and lets it go.
 
 use crate::common::{dirichlet_solve, edge_laplacian};
 use rapier_touch::prelude::*;
@@ -256,4 +258,48 @@ fn friction_is_validated_and_frictionless_tools_slide() {
     let grip = Friction::new(1.0, 1.0).unwrap();
     set.set_pair_friction(h, tool, grip).unwrap();
     assert_eq!(set.friction(h, tool), grip);
+}
+
+#[test]
+fn a_grasping_tool_lifts_a_fold_feels_its_pull_and_lets_it_go() {
+    let half = 0.04;
+    for friction in [Friction::NONE, Friction::new(0.3, 0.2).unwrap()] {
+        let (mut world, mut set, h, body, tool) = scene(friction, half, 8);
+        let pressed = Vector::new(0.0, -0.01, 0.0);
+        drive(&mut world, &mut set, body, half, &[pressed], 30, 60);
+        set.set_grasp(tool, true).unwrap();
+        assert!(set.is_grasping(tool));
+        // Lifted 2 cm above the plate and moved 5 mm sideways: the vertex comes along.
+        let lifted = Vector::new(0.005, 0.02, 0.0);
+        drive(&mut world, &mut set, body, half, &[lifted], 30, 240);
+        let u = set.get(h).unwrap().surface.displacement(CENTRE);
+        assert!(
+            (u - lifted).length() < 2e-4,
+            "{friction:?}: displacement {u}"
+        );
+        // The tool feels the fold's static spring force: pulled down and back.
+        let r = set.tool_reaction(tool).unwrap();
+        let expected = static_force(lifted);
+        assert!(expected.y < 0.0 && expected.x < 0.0);
+        assert!(
+            (r.force - expected).length() <= 0.05 * expected.length(),
+            "{friction:?}: force {} against the static {expected}",
+            r.force
+        );
+        assert_eq!((r.held_vertices, r.sticking_vertices), (1, 1));
+        // Let go: the springs pull the vertex off the tool and the plate flattens.
+        set.set_grasp(tool, false).unwrap();
+        drive(&mut world, &mut set, body, half, &[lifted], 1, 240);
+        let r = set.tool_reaction(tool).unwrap();
+        assert_eq!(r.held_vertices, 0, "{friction:?}");
+        assert_eq!(r.force, Vector::ZERO);
+        let u = set.get(h).unwrap().surface.displacement(CENTRE);
+        assert!(u.length() < 1e-3, "{friction:?}: not back: {u}");
+    }
+    // Only registered tools grasp.
+    let (_, mut set, ..) = scene(Friction::NONE, half, 1);
+    assert!(matches!(
+        set.set_grasp(ColliderHandle::invalid(), true),
+        Err(CouplingError::NoSuchCollider)
+    ));
 }
