@@ -1,12 +1,11 @@
 //! Coulomb friction and grasping between a tool and a soft surface (issue 13 items 5 and 6),
-//! against static
-//! solves of the plate's springs written here: a flat-bottomed tool pressed into a clamped
-//! plate and dragged sideways either carries the vertex under it (below the static limit: the
-//! vertex sits where the tool put it, and the tool feels the static spring force, normal and
-//! tangential) or slides over it (the tool feels kinetic friction, and the vertex comes to rest
-//! where its springs balance it: `|F_t| = μd F_n` for `μs = μd`, within `[μd, μs] F_n` after
-//! stick-slip otherwise). A grasping tool lifts the vertex with it, feels the fold's static pull,
-//! and lets it go.
+//! against static solves of the plate's springs written here: a flat-bottomed tool pressed
+//! into a clamped plate and dragged sideways either carries the vertex under it (below the
+//! static limit: the vertex sits where the tool put it, and the tool feels the static spring
+//! force, normal and tangential) or slides over it (the tool feels kinetic friction, and the
+//! vertex comes to rest where its springs balance it: `|F_t| = μd F_n` for `μs = μd`, within
+//! `[μd, μs] F_n` after stick-slip otherwise). A grasping tool lifts the vertex with it, feels
+//! the fold's static pull, and lets it go.
 
 use crate::common::{dirichlet_solve, edge_laplacian};
 use rapier_touch::prelude::*;
