@@ -12,14 +12,44 @@ use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::surface::meshing::{plate, plate_rim};
 
-const CELLS: u32 = 10; // 11 x 11 vertices, 0.1 m apart on a 1 m plate
-const K: f32 = 100.0;
+const CELLS: u32 = 10; // 11 x 11 vertices, 0.1 m apart on a 1 m plate (unit scale)
 /// The centre vertex, at the origin.
 const CENTRE: u32 = (CELLS / 2) * (CELLS + 1) + CELLS / 2;
+
+/// The plate: its size (m), edge stiffness (N/m) and mass per vertex (kg); edge damping
+/// `sqrt(k m)`.
+#[derive(Copy, Clone, Debug)]
+struct Plate {
+    size: f32,
+    k: f32,
+    mass: f32,
+}
+
+const UNIT: Plate = Plate {
+    size: 1.0,
+    k: 100.0,
+    mass: 0.01,
+};
 
 /// A clamped plate (linear springs: the static solution splits by axis) on a fixed body, and a
 /// kinematic cube of half-size `half` whose bottom face starts 5 cm above the centre vertex.
 fn scene(
+    friction: Friction,
+    half: f32,
+    substeps: u32,
+) -> (
+    PhysicsWorld,
+    SurfaceSet,
+    SurfaceHandle,
+    RigidBodyHandle,
+    ColliderHandle,
+) {
+    scene_on(&UNIT, friction, half, substeps)
+}
+
+/// [`scene`] on any plate (the cube 5 % of the plate's size above it).
+fn scene_on(
+    plate_of: &Plate,
     friction: Friction,
     half: f32,
     substeps: u32,
@@ -35,10 +65,11 @@ fn scene(
         ..Default::default()
     };
     let body = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, CELLS, CELLS))
-        .stiffness(K)
-        .damping(1.0)
-        .mass(MassDistribution::PerVertex(0.01))
+    let Plate { size, k, mass } = *plate_of;
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, CELLS, CELLS))
+        .stiffness(k)
+        .damping((k * mass).sqrt())
+        .mass(MassDistribution::PerVertex(mass))
         .pinned(plate_rim(CELLS, CELLS))
         .build()
         .unwrap();
@@ -51,7 +82,7 @@ fn scene(
     let tool_body = world.insert_body(
         RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
             0.0,
-            half + 0.05,
+            half + 0.05 * size,
             0.0,
         )),
     );
@@ -89,9 +120,14 @@ fn drive(
 /// The static spring force on the tool when the centre vertex alone is displaced by `u` (the
 /// rim pinned, the rest in equilibrium): `-(L u)_c` per axis (linear springs).
 fn static_force(u: Vector) -> Vector {
+    static_force_on(&UNIT, u)
+}
+
+/// [`static_force`] on any plate (linear springs: the size does not enter).
+fn static_force_on(plate_of: &Plate, u: Vector) -> Vector {
     let mesh = plate(1.0, 1.0, CELLS, CELLS);
     let n = mesh.vertices.len();
-    let lap = edge_laplacian(&mesh.triangles, n, K as f64);
+    let lap = edge_laplacian(&mesh.triangles, n, plate_of.k as f64);
     let rim = plate_rim(CELLS, CELLS);
     let known: Vec<bool> = (0..n as u32)
         .map(|i| i == CENTRE || rim.contains(&i))
@@ -301,4 +337,48 @@ fn a_grasping_tool_lifts_a_fold_feels_its_pull_and_lets_it_go() {
         set.set_grasp(ColliderHandle::invalid(), true),
         Err(CouplingError::NoSuchCollider)
     ));
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 12, ..Default::default() })]
+
+    /// Plates from 1 mm to 100 m across, edges from 1 to 1000 N/m, vertices from 1 g to 100 g,
+    /// μs from 0.1 to 1, 1 or 8 substeps: a tool dragged below the static limit carries the
+    /// vertex and feels the static force; with μs = μd, dragged far, it leaves the vertex
+    /// resting where its springs balance μd.
+    #[test]
+    fn friction_holds_at_any_scale_stiffness_and_mass(
+        log_size in -3.0f32..2.0, log_k in 0.0f32..3.0, log_mass in -3.0f32..-1.0,
+        mu in 0.1f32..1.0, eight in proptest::bool::ANY,
+    ) {
+        let p = Plate { size: 10f32.powf(log_size), k: 10f32.powf(log_k), mass: 10f32.powf(log_mass) };
+        let substeps = if eight { 8 } else { 1 };
+        let (depth, half) = (0.01 * p.size, 0.06 * p.size);
+        // Stuck: a tangential load half the static limit.
+        let (mut world, mut set, h, body, tool) =
+            scene_on(&p, Friction::new(mu, 0.5 * mu).unwrap(), half, substeps);
+        let pressed = Vector::new(0.0, -depth, 0.0);
+        let dragged = Vector::new(0.5 * mu * depth, -depth, 0.0);
+        // Settled before the drag (a heavy soft plate still swinging loads the tool less).
+        drive(&mut world, &mut set, body, half, &[pressed], 30, 300);
+        drive(&mut world, &mut set, body, half, &[dragged], 30, 300);
+        let u = set.get(h).unwrap().surface.displacement(CENTRE);
+        proptest::prop_assert!((u - dragged).length() < 0.02 * depth, "{p:?}: displacement {u}");
+        let r = set.tool_reaction(tool).unwrap();
+        let expected = static_force_on(&p, dragged);
+        proptest::prop_assert!(
+            (r.force - expected).length() <= 0.05 * expected.length(),
+            "{p:?}: force {} against the static {expected}", r.force
+        );
+        // Sliding with μs = μd: rests at |F_t| = μ F_n.
+        let (mut world, mut set, h, body, _) =
+            scene_on(&p, Friction::new(mu, mu).unwrap(), half, substeps);
+        drive(&mut world, &mut set, body, half, &[pressed], 30, 300);
+        let end = Vector::new(4.0 * depth, -depth, 0.0);
+        drive(&mut world, &mut set, body, half, &[end], 1200, 300);
+        let u = set.get(h).unwrap().surface.displacement(CENTRE);
+        let f = static_force_on(&p, u);
+        let ratio = f.x.abs() / f.y;
+        proptest::prop_assert!((ratio - mu).abs() <= 0.05 * mu, "{p:?}: rests at {ratio} for μ {mu}");
+    }
 }
