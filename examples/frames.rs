@@ -13,6 +13,11 @@
 //!   red, the plate's force on the ball (averaged over the step's substeps) a red arrow and the
 //!   ball's weight a black one, 20 mm per N.
 //!
+//! - `surgery_<t>s.png`: `scenes::SurgeryScene` (the `surgery` example) at 0.5 s (the tools
+//!   down), 1.5 s (the grasped fold up, the needle in), 2.5 s (the blade half-way along its
+//!   slide) and 3.3 s (all three at work, just before the grasper lets go), drawn as
+//!   `multi_tool`'s frames (1 cm arrow = 0.1 N).
+//!
 //! A progress bar on stderr follows the runs (`--quiet` hides it).
 //!
 //! Run with `cargo run --release --features render --example frames [-- output dir] [--quiet]`
@@ -21,7 +26,7 @@
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::render::{Color, Legend, MeshStyle, Projection, Scene};
-use rapier_touch::scenes::{BallOnPlateScene, MultiToolScene};
+use rapier_touch::scenes::{BallOnPlateScene, MultiToolScene, SurgeryScene};
 use std::error::Error;
 use std::path::Path;
 
@@ -80,6 +85,49 @@ fn add_tool(scene: &mut Scene, world: &PhysicsWorld, tool: ColliderHandle) {
     scene.add_shape(c.shape(), c.position(), &style);
 }
 
+/// A scene of a surface (coloured by displacement up to `max`), its tools, and each tool's
+/// force as an arrow from the tool's centre over everything else, 0.1 N drawn 10 mm long.
+fn tools_scene(
+    s: &MassSpringSurface,
+    world: &PhysicsWorld,
+    tools: &[(ColliderHandle, Vector)],
+    max: Real,
+) -> Result<Scene, Box<dyn Error>> {
+    let mut scene = Scene::new();
+    add_surface(&mut scene, s, max)?;
+    for (c, _) in tools {
+        add_tool(&mut scene, world, *c);
+    }
+    for (c, f) in tools {
+        let centre = world.colliders[*c].position().translation;
+        if f.length() > 1e-4 {
+            scene.add_arrow(centre, centre + *f * 0.1, red(), 3.0);
+        }
+    }
+    Ok(scene)
+}
+
+/// Steps `sim` with `step` up to each of `times` (s, ascending; `dt` a step) and calls `draw`
+/// there.
+fn at_times<S>(
+    sim: &mut S,
+    times: &[Real],
+    dt: Real,
+    bar: &indicatif::ProgressBar,
+    step: fn(&mut S),
+    mut draw: impl FnMut(&S) -> Result<(), Box<dyn Error>>,
+) -> Result<(), Box<dyn Error>> {
+    let frames: Vec<usize> = times.iter().map(|t| (t / dt).round() as usize).collect();
+    for k in 1..=frames.last().copied().unwrap_or(0) {
+        step(sim);
+        bar.inc(1);
+        if frames.contains(&k) {
+            draw(sim)?;
+        }
+    }
+    Ok(())
+}
+
 /// The home positions of a surface's vertices.
 fn home(s: &MassSpringSurface) -> Vec<Vector> {
     (0..s.num_vertices() as u32).map(|i| s.home(i)).collect()
@@ -122,31 +170,13 @@ fn multi_tool(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn Er
         .flat_map(|p| [p, p + Vector::new(0.0, 0.03, 0.0)])
         .collect();
     let max = 1.25 * S::DEPTH;
-    let frames: Vec<usize> = (0..FRAMES)
-        .map(|k| ((0.5 + FRAME_EVERY * k as Real) / S::DT).round() as usize)
-        .collect();
-    for step in 1..=*frames.last().expect("frames") {
-        sim.step();
-        bar.inc(1);
-        if !frames.contains(&step) {
-            continue;
-        }
+    let times: Vec<Real> = (0..FRAMES).map(|k| 0.5 + FRAME_EVERY * k as Real).collect();
+    at_times(&mut sim, &times, S::DT, bar, S::step, |sim| {
         let t = sim.time();
-        let mut scene = Scene::new();
-        add_surface(&mut scene, sim.surface(), max)?;
-        for k in 0..sim.tools.len() {
-            add_tool(&mut scene, &sim.world, sim.tools[k].collider);
-        }
-        // Arrows over everything else: 0.1 N drawn 10 mm long.
-        for k in 0..sim.tools.len() {
-            let centre = sim.world.colliders[sim.tools[k].collider]
-                .position()
-                .translation;
-            let f = sim.tool_reaction(k).force;
-            if f.length() > 1e-4 {
-                scene.add_arrow(centre, centre + f * 0.1, red(), 3.0);
-            }
-        }
+        let tools: Vec<(ColliderHandle, Vector)> = (0..sim.tools.len())
+            .map(|k| (sim.tools[k].collider, sim.tool_reaction(k).force))
+            .collect();
+        let mut scene = tools_scene(sim.surface(), &sim.world, &tools, max)?;
         let held: usize = (0..sim.tools.len())
             .map(|k| sim.tool_reaction(k).held_vertices)
             .sum();
@@ -162,8 +192,46 @@ fn multi_tool(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn Er
             Vector::new(-0.45, -0.75, -1.0),
             &dir.join(format!("multi_tool_{t:.1}s.png")),
         )?;
-    }
-    Ok(())
+        Ok(())
+    })
+}
+
+/// Surgery frames: at these times (s).
+const SURGERY_FRAMES: [Real; 4] = [0.5, 1.5, 2.5, 3.3];
+
+fn surgery(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn Error>> {
+    bar.set_message("surgery");
+    type S = SurgeryScene;
+    let mut sim = S::new();
+    let frame_points: Vec<Vector> = home(sim.surface())
+        .into_iter()
+        .flat_map(|p| [p, p + Vector::new(0.0, 0.025, 0.0)])
+        .collect();
+    let max = 0.012;
+    at_times(&mut sim, &SURGERY_FRAMES, S::DT, bar, S::step, |sim| {
+        let t = sim.time();
+        let tools: Vec<(ColliderHandle, Vector)> = (0..sim.tools.len())
+            .map(|k| (sim.tools[k].collider, sim.tool_reaction(k).force))
+            .collect();
+        let mut scene = tools_scene(sim.surface(), &sim.dome.world, &tools, max)?;
+        let mut lines = Vec::new();
+        for (k, tool) in sim.tools.iter().enumerate() {
+            let (normal, tangential) = sim.normal_and_tangential(k);
+            lines.push(format!(
+                "{}: N {normal:+.3} T {tangential:.3}",
+                tool.name.to_uppercase()
+            ));
+        }
+        scene.set_title(format!("SURGERY   T = {t:.2} S\n{}", lines.join("\n")));
+        save(
+            &mut scene,
+            max,
+            &frame_points,
+            Vector::new(-0.45, -0.75, -1.0),
+            &dir.join(format!("surgery_{t:.1}s.png")),
+        )?;
+        Ok(())
+    })
 }
 
 fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn Error>> {
@@ -254,8 +322,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let last = 0.5 + FRAME_EVERY * (FRAMES - 1) as Real;
     let multi_steps = (last / MultiToolScene::DT).round() as u64;
     let ball_steps = 2 * BallOnPlateScene::total_steps() as u64;
-    let bar = progress::bar(multi_steps + ball_steps, "frames");
+    let surgery_steps = (SURGERY_FRAMES[3] / SurgeryScene::DT).round() as u64;
+    let bar = progress::bar(multi_steps + ball_steps + surgery_steps, "frames");
     multi_tool(&dir, &bar)?;
+    surgery(&dir, &bar)?;
     ball_on_plate(&dir, &bar)?;
     bar.finish_and_clear();
     Ok(())

@@ -61,6 +61,7 @@ mod compare;
 mod multi_tool;
 mod organ;
 mod stress;
+mod surgery;
 
 pub use ball_on_plate::BallOnPlateScene;
 pub use compare::{
@@ -68,13 +69,15 @@ pub use compare::{
     COMPARE_DROP_HEIGHT, COMPARE_FLOOR_HALF, COMPARE_SPIN, PLATE_HALF, SMALL_SCALE,
 };
 pub use multi_tool::{
-    multi_tool_specs, tool_script, MultiTool, MultiToolScene, ToolPhase, ToolShape, ToolSpec,
+    multi_tool_specs, tool_script, MultiTool, MultiToolScene, OrganDome, ToolPhase, ToolShape,
+    ToolSpec,
 };
 pub use organ::{diverged, Fig7Organ, COMPARED_INTEGRATORS};
 pub use stress::{
     deepest_solved_overlap, run_stress, stress_world, StressRun, StressScene, StressSide,
     StressWorld,
 };
+pub use surgery::{SurgeryScene, SurgeryTool};
 
 /// `Debug` of a [`PhysicsWorld`] (which has none): its sizes, time step and gravity, not its
 /// contents. The scenes' `Debug` impls show their world through it.

@@ -152,6 +152,89 @@ pub fn tool_script(spec: &ToolSpec, k: usize, t: Real) -> ([Real; 2], Real, Tool
     }
 }
 
+/// The paper's 788-node organ raised into a dome ([`MultiToolScene::DOME_HEIGHT`], edges of
+/// [`MultiToolScene::K`] and [`MultiToolScene::C`], [`MultiToolScene::DENSITY`], the exact
+/// filter), pinned on its outer boundary and attached to a fixed body in a world with no
+/// gravity (dt = 1/60 s): the organ of the multi-tool and surgery scenes.
+pub struct OrganDome {
+    /// The rapier world.
+    pub world: PhysicsWorld,
+    /// The organ in a set of its own.
+    pub set: SurfaceSet,
+    /// The organ in [`Self::set`].
+    pub organ: SurfaceHandle,
+    /// The TriMesh collider that follows the deformed organ.
+    pub organ_collider: ColliderHandle,
+    /// The planar mesh (the home in plan).
+    pub flat: SurfaceMesh,
+    /// The home height at each vertex (m).
+    pub heights: Vec<Real>,
+    /// The pinned outer-boundary vertices.
+    pub base: Vec<u32>,
+    /// Upward unit normals of the home surface at the vertices.
+    pub normals: Vec<Vector>,
+}
+
+/// Builds an [`OrganDome`] with `substeps` surface steps per rigid step.
+fn organ_dome(substeps: u32) -> OrganDome {
+    type S = MultiToolScene;
+    let (height, k, c, density) = (S::DOME_HEIGHT, S::K, S::C, S::DENSITY);
+    let planar = paper_organ();
+    let flat = planar.mesh;
+    let base = planar.boundary;
+    let heights: Vec<Real> = dome(&flat, &base).iter().map(|h| h * height).collect();
+    let vertices: Vec<Vector> = flat
+        .vertices
+        .iter()
+        .zip(&heights)
+        .map(|(v, h)| Vector::new(v.x, *h, v.z))
+        .collect();
+    let normals = vertex_normals(&vertices, &flat.triangles);
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
+    world.integration_parameters.dt = 1.0 / 60.0;
+    let surface = MassSpringSurfaceBuilder::new(vertices, flat.triangles.clone())
+        .stiffness(k)
+        .damping(c)
+        .mass(MassDistribution::AreaDensity(density))
+        .pinned(base.iter().copied())
+        .integrator(Integrator::EXACT)
+        .build()
+        .expect("valid organ mesh");
+    let (set, organ, organ_collider) = attach_fixed(&mut world, surface, substeps);
+    OrganDome {
+        world,
+        set,
+        organ,
+        organ_collider,
+        flat,
+        heights,
+        base,
+        normals,
+    }
+}
+
+impl std::fmt::Debug for OrganDome {
+    /// The world's sizes, the set and the handles; the meshes as counts.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OrganDome")
+            .field("world", &super::WorldSummary(&self.world))
+            .field("set", &self.set)
+            .field("organ", &self.organ)
+            .field("flat_vertices", &self.flat.vertices.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl OrganDome {
+    /// The organ with `substeps` surface steps per rigid step.
+    pub fn new(substeps: u32) -> Self {
+        organ_dome(substeps)
+    }
+}
+
 /// A dome over the planar mesh: the solution of the graph Poisson problem `L h = 1` with
 /// `h = 0` on `boundary` (SOR), scaled to a peak of 1.
 fn dome(mesh: &SurfaceMesh, boundary: &[u32]) -> Vec<Real> {
@@ -329,46 +412,18 @@ impl MultiToolScene {
 
     /// Builds the world, the organ and the tools at their waiting poses (t = 0).
     pub fn new() -> Self {
-        let planar = paper_organ();
-        let flat = planar.mesh;
-        let base = planar.boundary;
-        let heights: Vec<Real> = dome(&flat, &base)
-            .iter()
-            .map(|h| h * Self::DOME_HEIGHT)
-            .collect();
-        let vertices: Vec<Vector> = flat
-            .vertices
-            .iter()
-            .zip(&heights)
-            .map(|(v, h)| Vector::new(v.x, *h, v.z))
-            .collect();
-        let normals = vertex_normals(&vertices, &flat.triangles);
-
-        let mut world = PhysicsWorld {
-            gravity: Vector::ZERO,
-            ..Default::default()
-        };
-        world.integration_parameters.dt = Self::DT;
-        let surface = MassSpringSurfaceBuilder::new(vertices, flat.triangles.clone())
-            .stiffness(Self::K)
-            .damping(Self::C)
-            .mass(MassDistribution::AreaDensity(Self::DENSITY))
-            .pinned(base.iter().copied())
-            .integrator(Integrator::EXACT)
-            .build()
-            .expect("valid organ mesh");
-        let (set, organ, organ_collider) = attach_fixed(&mut world, surface, Self::SUBSTEPS);
+        let d = OrganDome::new(Self::SUBSTEPS);
 
         let mut scene = MultiToolScene {
-            world,
-            set,
-            organ,
-            organ_collider,
+            world: d.world,
+            set: d.set,
+            organ: d.organ,
+            organ_collider: d.organ_collider,
             tools: Vec::new(),
-            flat,
-            heights,
-            base,
-            normals,
+            flat: d.flat,
+            heights: d.heights,
+            base: d.base,
+            normals: d.normals,
             targets: Vec::new(),
             steps: 0,
         };
@@ -462,20 +517,7 @@ impl MultiToolScene {
     /// The home surface's height over `(u, v)`, interpolated in the planar triangle containing
     /// it. Panics if the point is not over the organ.
     pub fn home_height(&self, u: Real, v: Real) -> Real {
-        for t in &self.flat.triangles {
-            let [a, b, c] = t.map(|i| self.flat.vertices[i as usize]);
-            let (e1, e2) = ((b.x - a.x, b.z - a.z), (c.x - a.x, c.z - a.z));
-            let (px, pz) = (u - a.x, v - a.z);
-            let det = e1.0 * e2.1 - e1.1 * e2.0;
-            let l1 = (px * e2.1 - pz * e2.0) / det;
-            let l2 = (e1.0 * pz - e1.1 * px) / det;
-            let l0 = 1.0 - l1 - l2;
-            if l0 >= -1e-6 && l1 >= -1e-6 && l2 >= -1e-6 {
-                let [ha, hb, hc] = t.map(|i| self.heights[i as usize]);
-                return l0 * ha + l1 * hb + l2 * hc;
-            }
-        }
-        panic!("({u}, {v}) is not over the organ");
+        home_height_of(&self.flat, &self.heights, u, v)
     }
 
     /// The home surface's upward normal at the vertex nearest to `(u, v)` in plan.
@@ -513,4 +555,24 @@ impl MultiToolScene {
             })
         })
     }
+}
+
+/// The height over `(u, v)` of the surface with heights `heights` over the planar mesh
+/// `flat`, interpolated in the planar triangle containing it. Panics if the point is not over
+/// the mesh.
+pub(super) fn home_height_of(flat: &SurfaceMesh, heights: &[Real], u: Real, v: Real) -> Real {
+    for t in &flat.triangles {
+        let [a, b, c] = t.map(|i| flat.vertices[i as usize]);
+        let (e1, e2) = ((b.x - a.x, b.z - a.z), (c.x - a.x, c.z - a.z));
+        let (px, pz) = (u - a.x, v - a.z);
+        let det = e1.0 * e2.1 - e1.1 * e2.0;
+        let l1 = (px * e2.1 - pz * e2.0) / det;
+        let l2 = (e1.0 * pz - e1.1 * px) / det;
+        let l0 = 1.0 - l1 - l2;
+        if l0 >= -1e-6 && l1 >= -1e-6 && l2 >= -1e-6 {
+            let [ha, hb, hc] = t.map(|i| heights[i as usize]);
+            return l0 * ha + l1 * hb + l2 * hc;
+        }
+    }
+    panic!("({u}, {v}) is not over the organ");
 }
