@@ -205,7 +205,7 @@ impl SurgeryScene {
     }
 
     /// One rigid step: the tools go to their scripted poses at the end of the step, the
-    /// grasper grasps or lets go on time, then [`SurfaceSet::step`].
+    /// grasper grasps or lets go on time, then [`crate::coupling::SurfaceSet::step`].
     pub fn step(&mut self) {
         self.steps += 1;
         let t = self.time();
