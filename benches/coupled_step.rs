@@ -16,7 +16,8 @@
 //! rigid step (s up to about 15: the neighbour filter falls back to the exact one) and with 17
 //! (a 1 kHz surface, s ≤ 0.24, neighbour filter), the 60 Hz scene with six 4 cm cubes in place
 //! of the balls (face, edge and corner contacts: the cubes' vertices and edges press between
-//! the surface's vertices), and 10,000 nodes (100 x 100) with 2 tools
+//! the surface's vertices), the 60 Hz ball scene with Coulomb friction on every tool (μs 0.5,
+//! μd 0.4: the circling balls stick and slip), and 10,000 nodes (100 x 100) with 2 tools
 //! in a 1 kHz world, 1 substep, neighbour filter. The set-up prints each scene's filter. Targets (one core): 790 nodes and 6 tools ≤ 300 µs per full
 //! step, the haptic path ≤ 50 µs, 10,000 nodes with 2 tools ≤ 1 ms.
 //!
@@ -46,7 +47,7 @@ fn tool_pose(k: usize, n: usize, centre: Vector, t: f32) -> Pose {
     Pose::from_translation(centre + Vector::new(0.005 * a.cos(), R - 0.006, 0.005 * a.sin()))
 }
 
-fn scene(side: u32, tools: usize, substeps: u32, dt: f32, cubes: bool) -> Scene {
+fn scene(side: u32, tools: usize, substeps: u32, dt: f32, cubes: bool, friction: bool) -> Scene {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
@@ -79,6 +80,10 @@ fn scene(side: u32, tools: usize, substeps: u32, dt: f32, cubes: bool) -> Scene 
         };
         let h = world.insert_collider(shape, Some(b));
         set.add_tool(h, &mut world).unwrap();
+        if friction {
+            set.set_tool_friction(h, Friction::new(0.5, 0.4).unwrap())
+                .unwrap();
+        }
         handles.push((h, b, *c));
     }
     // Press the tools in through real rapier steps.
@@ -100,6 +105,13 @@ fn scene(side: u32, tools: usize, substeps: u32, dt: f32, cubes: bool) -> Scene 
         surface.filter_fallback(),
         surface.s_values().iter().cloned().fold(0.0, f32::max)
     );
+    if friction {
+        let sticking: usize = handles
+            .iter()
+            .map(|(h, _, _)| set.tool_reaction(*h).unwrap().sticking_vertices)
+            .sum();
+        println!("friction: {sticking} vertices stick to the tools");
+    }
     for (h, _, _) in &handles {
         let r = set.tool_reaction(*h).unwrap();
         assert!(
@@ -146,13 +158,38 @@ fn bench(c: &mut Criterion) {
     g.sample_size(20)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2));
-    for (name, side, tools, substeps, dt, cubes) in [
-        ("784n_6tools_60hz", 27u32, 6usize, 1u32, 1.0 / 60.0, false),
-        ("784n_6cubes_60hz", 27, 6, 1, 1.0 / 60.0, true),
-        ("784n_6tools_60hz_17sub", 27, 6, 17, 1.0 / 60.0, false),
-        ("10kn_2tools_1khz", 99, 2, 1, 1.0 / 1000.0, false),
+    for (name, side, tools, substeps, dt, cubes, friction) in [
+        (
+            "784n_6tools_60hz",
+            27u32,
+            6usize,
+            1u32,
+            1.0 / 60.0,
+            false,
+            false,
+        ),
+        (
+            "784n_6tools_60hz_friction",
+            27,
+            6,
+            1,
+            1.0 / 60.0,
+            false,
+            true,
+        ),
+        ("784n_6cubes_60hz", 27, 6, 1, 1.0 / 60.0, true, false),
+        (
+            "784n_6tools_60hz_17sub",
+            27,
+            6,
+            17,
+            1.0 / 60.0,
+            false,
+            false,
+        ),
+        ("10kn_2tools_1khz", 99, 2, 1, 1.0 / 1000.0, false, false),
     ] {
-        let mut s = scene(side, tools, substeps, dt, cubes);
+        let mut s = scene(side, tools, substeps, dt, cubes, friction);
         g.bench_function(format!("{name}/rapier_step"), |b| {
             b.iter(|| s.rapier_step())
         });
