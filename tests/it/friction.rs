@@ -6,6 +6,12 @@
 //! vertex comes to rest where its springs balance it: `|F_t| = μd F_n` for `μs = μd`, within
 //! `[μd, μs] F_n` after stick-slip otherwise). A grasping tool lifts the vertex with it, feels
 //! the fold's static pull, and lets it go.
+//!
+//! Known gap, not hidden: the cube's face holds the centre vertex only, and the pressing model
+//! skips points that touch a held vertex, so the face's corners sit a few millimetres below
+//! the triangles around it. These tests check Coulomb's law at the held vertex against the
+//! one-vertex static solve; once corners next to a held vertex are pressed, the static solve
+//! must include the face's points.
 
 use crate::common::{dirichlet_solve, edge_laplacian};
 use rapier_touch::prelude::*;
