@@ -227,8 +227,10 @@ struct ToolState {
 /// (`TriMesh::set_vertices`, a BVH refit).
 ///
 /// # Limitations
-/// - Loading happens at vertices: a sharp tool tip pressing inside a large triangle with no
-///   vertex inside the tool is not seen. Mesh the surface finer than the tool.
+/// - Curved tools load the surface's vertices only (mesh it finer than a ball). Polyhedral
+///   tools also press their vertices and edges between the surface's vertices, except next to
+///   a vertex they hold (left to that vertex's holder): a flat face holding a vertex sinks its
+///   corners into the triangles around it, up to about a millimetre at first contact.
 /// - Tools are tested with parry's point queries: convex shapes. Balls, cuboids, capsules and
 ///   cylinders give steady forces, and so does a box-shaped convex polyhedron. A rounded
 ///   convex polyhedron (the hull of an icosphere) holds vertices but its force fluctuates from
