@@ -217,3 +217,58 @@ fn a_tool_dents_a_soft_plate_its_mesh_follows_and_its_reaction_matches_a_static_
     );
     assert_eq!(positions[0], [-0.5, 0.0, -0.5]);
 }
+
+#[test]
+fn despawning_tools_and_surfaces_mid_press_is_safe() {
+    let mut app = app(true);
+    let soft = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, 10, 10))
+        .pinned(plate_rim(10, 10))
+        .build()
+        .unwrap();
+    let options = AttachOptions {
+        substeps: 4,
+        collider: true,
+    };
+    let surface = app
+        .world_mut()
+        .spawn((
+            RigidBody::Fixed,
+            Transform::default(),
+            SoftSurface::new(soft, options),
+        ))
+        .id();
+    // Balls 1 cm into the plate over two of its vertices.
+    let ball = |app: &mut App, x: f32| {
+        app.world_mut()
+            .spawn((
+                RigidBody::KinematicPositionBased,
+                Collider::ball(0.03),
+                SurfaceTool,
+                Transform::from_xyz(x, 0.02, 0.0),
+            ))
+            .id()
+    };
+    let first = ball(&mut app, -0.2);
+    let second = ball(&mut app, 0.2);
+    for _ in 0..30 {
+        app.update();
+    }
+    for tool in [first, second] {
+        let pressed = app.world().get::<SurfaceToolReaction>(tool).unwrap().0;
+        assert!(pressed.force.y > 0.0 && pressed.held_vertices == 1);
+    }
+    // A tool goes mid-press: the other keeps its force, nothing panics.
+    app.world_mut().despawn(first);
+    for _ in 0..30 {
+        app.update();
+    }
+    let r = app.world().get::<SurfaceToolReaction>(second).unwrap().0;
+    assert!(r.force.y > 0.0 && r.force.is_finite());
+    // The surface goes: the tool's reaction drops to nothing.
+    app.world_mut().despawn(surface);
+    for _ in 0..30 {
+        app.update();
+    }
+    let r = app.world().get::<SurfaceToolReaction>(second).unwrap().0;
+    assert_eq!(r.force, Vec3::ZERO);
+}
