@@ -264,15 +264,14 @@ pub(super) fn hold_vertices(
         // The tool's outward normal at the contact point.
         let n = pose.rotation * outward_normal(shape, local, margin);
         let tool_velocity = material_velocity(local);
-        let (v, hold) = if stuck.is_some() {
-            (tool_velocity, surface.set_state(iu, out, tool_velocity))
+        let v = if stuck.is_some() {
+            tool_velocity
         } else {
             // Sliding: the tool sets the normal velocity only.
             let v_own = surface.velocity(iu);
-            let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
-            (v, surface.set_state(iu, out, v))
+            v_own - n * v_own.dot(n) + n * tool_velocity.dot(n)
         };
-        if hold.is_ok() && v.is_finite() {
+        if surface.set_state(iu, out, v).is_ok() {
             let _ = if stuck.is_some() {
                 surface.hold(iu)
             } else {
@@ -296,34 +295,25 @@ pub(super) fn hold_vertices(
     let slip_eps = if h > 0.0 { margin / h } else { Real::MAX };
     for &(i, n, local, was_stuck) in &held {
         let f = surface.internal_force(i);
-        if grasp {
+        let (on_tool, next) = if grasp {
             // Grasped: stuck whatever its springs do, pulled or pushed; the tool feels it all.
-            if !was_stuck {
-                let _ = surface.set_state(i, surface.position(i), material_velocity(local));
-                let _ = surface.hold(i);
-            }
-            sticks.insert(i, (tool, Contact::Stuck(local)));
-            out.sticking += 1;
-            out.force += f;
-            out.moment += surface.position(i).cross(f);
-            out.count += 1;
-            continue;
-        }
-        if f.dot(n) >= 0.0 {
+            (f, Settled::Stick)
+        } else if f.dot(n) >= 0.0 {
             surface.release(i);
             // A vertex that only followed the tool separates where its own motion took it.
             if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
                 let _ = surface.set_state(i, p, v);
             }
             continue;
-        }
-        let was = sticks
-            .get(&i)
-            .filter(|s| s.0 == tool && !friction.is_frictionless())
-            .map(|s| s.1);
-        let relative = surface.velocity(i) - material_velocity(local);
-        let slip = relative - n * relative.dot(n);
-        let (on_tool, next) = settle(friction, f, n, was, slip, slip_eps);
+        } else {
+            let was = sticks
+                .get(&i)
+                .filter(|s| s.0 == tool && !friction.is_frictionless())
+                .map(|s| s.1);
+            let relative = surface.velocity(i) - material_velocity(local);
+            let slip = relative - n * relative.dot(n);
+            settle(friction, f, n, was, slip, slip_eps)
+        };
         match next {
             Settled::Stick => {
                 if !was_stuck {

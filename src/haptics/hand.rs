@@ -103,11 +103,11 @@ impl SimulatedHand {
     pub fn step(&mut self) {
         let h = self.dt / Self::SUBSTEPS as Real;
         let mass = self.mass.max(1e-9);
+        let mut before = (self.trajectory)(self.t).translation;
         for _ in 0..Self::SUBSTEPS {
-            let target = (self.trajectory)(self.t + h).translation;
-            let before = (self.trajectory)(self.t).translation;
-            let (target, target_v) = if target.is_finite() && before.is_finite() {
-                (target, (target - before) / h)
+            let next = (self.trajectory)(self.t + h).translation;
+            let (target, target_v) = if next.is_finite() && before.is_finite() {
+                (next, (next - before) / h)
             } else {
                 (self.x, Vector::ZERO)
             };
@@ -120,6 +120,7 @@ impl SimulatedHand {
             self.damping_loss += (self.device_damping * self.v.length_squared() * h) as f64;
             self.x += step;
             self.t += h;
+            before = next;
         }
     }
 

@@ -521,13 +521,8 @@ impl MultiToolScene {
     }
 
     /// The home surface's upward normal at the vertex nearest to `(u, v)` in plan.
-    pub fn home_normal(&self, [u, v]: [Real; 2]) -> Vector {
-        let flat = &self.flat;
-        let d2 = |i: usize| (flat.vertices[i].x - u).powi(2) + (flat.vertices[i].z - v).powi(2);
-        let nearest = (0..flat.num_vertices())
-            .min_by(|&a, &b| d2(a).total_cmp(&d2(b)))
-            .expect("vertices");
-        self.normals[nearest]
+    pub fn home_normal(&self, site: [Real; 2]) -> Vector {
+        home_normal_of(&self.flat, &self.normals, site)
     }
 
     /// What the organ pushes back on tool `k` with after the last step.
@@ -575,4 +570,14 @@ pub(super) fn home_height_of(flat: &SurfaceMesh, heights: &[Real], u: Real, v: R
         }
     }
     panic!("({u}, {v}) is not over the organ");
+}
+
+/// The normal (of `normals`, one per vertex of the planar mesh `flat`) at the vertex nearest
+/// to `(u, v)` in plan.
+pub(super) fn home_normal_of(flat: &SurfaceMesh, normals: &[Vector], [u, v]: [Real; 2]) -> Vector {
+    let d2 = |i: usize| (flat.vertices[i].x - u).powi(2) + (flat.vertices[i].z - v).powi(2);
+    let nearest = (0..flat.num_vertices())
+        .min_by(|&a, &b| d2(a).total_cmp(&d2(b)))
+        .expect("vertices");
+    normals[nearest]
 }

@@ -2,7 +2,7 @@
 //! fold while a scalpel blade presses and slides and a needle pokes, with friction; the scene
 //! of the `surgery` example and of the `frames` example's surgery frames.
 
-use super::multi_tool::{home_height_of, OrganDome};
+use super::multi_tool::{home_height_of, home_normal_of, OrganDome};
 use crate::coupling::{Friction, ToolReaction};
 use crate::math::{Real, Rotation, Vector};
 use crate::surface::MassSpringSurface;
@@ -247,13 +247,7 @@ impl SurgeryScene {
     /// Tool `k`'s force split along the home surface's normal at its site (positive: pushed
     /// out of the organ) and across it (its size) (N).
     pub fn normal_and_tangential(&self, k: usize) -> (Real, Real) {
-        let [u, v] = self.tools[k].site;
-        let flat = &self.dome.flat;
-        let d2 = |i: usize| (flat.vertices[i].x - u).powi(2) + (flat.vertices[i].z - v).powi(2);
-        let nearest = (0..flat.num_vertices())
-            .min_by(|&a, &b| d2(a).total_cmp(&d2(b)))
-            .expect("vertices");
-        let n = self.dome.normals[nearest];
+        let n = home_normal_of(&self.dome.flat, &self.dome.normals, self.tools[k].site);
         let f = self.tool_reaction(k).force;
         let normal = f.dot(n);
         (normal, (f - n * normal).length())

@@ -37,35 +37,24 @@ const UNIT: Plate = Plate {
     mass: 0.01,
 };
 
-/// A clamped plate (linear springs: the static solution splits by axis) on a fixed body, and a
-/// kinematic cube of half-size `half` whose bottom face starts 5 cm above the centre vertex.
-fn scene(
-    friction: Friction,
-    half: f32,
-    substeps: u32,
-) -> (
+/// A world with the plate on a fixed body, its set, the plate, and the tool's body and
+/// collider.
+type Scene = (
     PhysicsWorld,
     SurfaceSet,
     SurfaceHandle,
     RigidBodyHandle,
     ColliderHandle,
-) {
+);
+
+/// A clamped plate (linear springs: the static solution splits by axis) on a fixed body, and a
+/// kinematic cube of half-size `half` whose bottom face starts 5 cm above the centre vertex.
+fn scene(friction: Friction, half: f32, substeps: u32) -> Scene {
     scene_on(&UNIT, friction, half, substeps)
 }
 
 /// [`scene`] on any plate (the cube 5 % of the plate's size above it).
-fn scene_on(
-    plate_of: &Plate,
-    friction: Friction,
-    half: f32,
-    substeps: u32,
-) -> (
-    PhysicsWorld,
-    SurfaceSet,
-    SurfaceHandle,
-    RigidBodyHandle,
-    ColliderHandle,
-) {
+fn scene_on(plate_of: &Plate, friction: Friction, half: f32, substeps: u32) -> Scene {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()

@@ -366,7 +366,9 @@ const REDUNDANT: f64 = 1e-4;
 #[derive(Default)]
 struct Cholesky {
     kept: Vec<usize>,
+    /// `L`, row-major with rows of `stride` (the rows offered to the last factorization).
     l: Vec<f64>,
+    stride: usize,
     y: Vec<f64>,
 }
 
@@ -375,6 +377,7 @@ impl Cholesky {
     /// before them (returned).
     fn factorize(&mut self, a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> Vec<usize> {
         let n = rows.len();
+        self.stride = n;
         self.kept.clear();
         self.l.clear();
         self.l.resize(n * n, 0.0);
@@ -401,12 +404,7 @@ impl Cholesky {
 
     /// Solves `A x = b` on the kept rows (in `kept`'s order).
     fn solve(&mut self, b: &nalgebra::DVector<f64>) -> Vec<f64> {
-        let k = self.kept.len();
-        let n = if k == 0 {
-            0
-        } else {
-            (self.l.len() as f64).sqrt() as usize
-        };
+        let (k, n) = (self.kept.len(), self.stride);
         self.y.clear();
         for r in 0..k {
             let s = b[self.kept[r]] - (0..r).map(|c| self.l[r * n + c] * self.y[c]).sum::<f64>();
