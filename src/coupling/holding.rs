@@ -61,6 +61,7 @@ pub(super) fn surface_substep(
     h: Real,
 ) -> Vec<(ColliderHandle, ToolReaction)> {
     let inv = body_pose.inverse();
+    retarget_holds(&mut s.surface, world, tools, &inv, h);
     s.surface.positions_into(&mut s.before);
     s.surface.step();
     record_impulses(&s.surface, &mut s.pressed);
@@ -155,6 +156,70 @@ pub(super) fn surface_substep(
         );
     }
     out
+}
+
+/// A held vertex moves through the next step as a pin with the velocity its holder gave it in
+/// the last substep. A tool that changed speed since (a hand stopping, a servo's proxy) would
+/// drag it on by a substep of the old motion, off the tool and into the springs it just
+/// loaded, and a contact that should rest bounces. So before the step each held vertex takes
+/// its holder's velocity over this substep at the contact point: the normal part for a
+/// sliding hold, all of it for a stuck one. The holder is the kinematic (or bodiless) tool
+/// whose boundary at the start of the substep the vertex lies on.
+fn retarget_holds(
+    surface: &mut MassSpringSurface,
+    world: &PhysicsWorld,
+    tools: &[ToolMotion],
+    inv: &Pose,
+    h: Real,
+) {
+    if h <= 0.0 {
+        return;
+    }
+    let poses: Vec<(&dyn parry3d::shape::Shape, Pose, Pose, Aabb, Real)> = tools
+        .iter()
+        .filter_map(|t| {
+            let collider = world.colliders.get(t.handle)?;
+            // Only tools whose motion is prescribed: a dynamic tool's comes from the
+            // surface's force a step late, and is not chased (as in `hold_vertices`).
+            if collider
+                .parent()
+                .and_then(|b| world.bodies.get(b))
+                .is_some_and(|b| b.is_dynamic())
+            {
+                return None;
+            }
+            let shape = t.shape.query.as_deref().unwrap_or(collider.shape());
+            let (start, end) = (*inv * t.start, *inv * t.end);
+            let aabb = shape.compute_aabb(&start);
+            let margin = 1e-5 * (1.0 + aabb.extents().max_element());
+            Some((shape, start, end, aabb.loosened(margin), margin))
+        })
+        .collect();
+    if poses.is_empty() {
+        return;
+    }
+    for i in 0..surface.num_vertices() as u32 {
+        if !surface.is_held(i) {
+            continue;
+        }
+        let p = surface.position(i);
+        let holder = poses.iter().find(|(shape, start, _, aabb, margin)| {
+            aabb.contains_local_point(p) && shape.distance_to_point(start, p, true) <= *margin
+        });
+        let Some((_, start, end, _, _)) = holder else {
+            continue;
+        };
+        let local = start.inverse_transform_point(p);
+        let tool_velocity = (end.transform_point(local) - p) / h;
+        let n = surface.held_normal(i);
+        let v = if n == Vector::ZERO {
+            tool_velocity
+        } else {
+            let own = surface.velocity(i);
+            own - n * own.dot(n) + n * tool_velocity.dot(n)
+        };
+        let _ = surface.set_state(i, p, v);
+    }
 }
 
 pub(super) fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {

@@ -4,6 +4,7 @@
 
 mod events;
 mod friction;
+mod haptic_links;
 mod holding;
 mod pressing;
 mod surface_set;

@@ -2,6 +2,7 @@
 
 use super::events::{ToolTouchEvent, TouchTracker};
 use super::friction::{Friction, Sticks};
+use super::haptic_links::LinkState;
 use super::holding::{attached_with_pose, lerp_pose, surface_substep, ToolMotion};
 use super::pressing::Pressed;
 use super::tool_shape::ToolShape;
@@ -53,6 +54,10 @@ pub enum CouplingError {
     /// parry rejected the surface's triangle mesh.
     #[error("the surface mesh cannot be a collider: {0}")]
     Collider(String),
+    /// A haptic tool must be kinematic or have no body: a dynamic body's motion is rapier's,
+    /// not the device's ([`SurfaceSet::connect_haptic`]).
+    #[error("a haptic tool cannot be on a dynamic body")]
+    DynamicHapticTool,
 }
 
 /// A handle to a surface in a [`SurfaceSet`].
@@ -185,9 +190,9 @@ impl AttachedSurface {
 }
 
 #[derive(Clone, Debug)]
-struct ToolState {
+pub(super) struct ToolState {
     prev: Option<Pose>,
-    reaction: ToolReaction,
+    pub(super) reaction: ToolReaction,
     /// The force and torque this set currently adds to the tool's body.
     applied: (Vector, Vector),
     /// The device pose of the last haptic step.
@@ -200,7 +205,7 @@ struct ToolState {
     /// Its friction on the surfaces (unless a surface has its own for it).
     friction: Friction,
     /// Whether it grasps what it touches.
-    grasp: bool,
+    pub(super) grasp: bool,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -285,9 +290,11 @@ struct ToolState {
 /// assert!((reaction.force - surface.internal_force(12)).length() < 0.05 * reaction.force.y);
 /// ```
 pub struct SurfaceSet {
-    entries: Vec<(u32, Option<AttachedSurface>)>,
-    tools: HashMap<ColliderHandle, ToolState>,
+    pub(super) entries: Vec<(u32, Option<AttachedSurface>)>,
+    pub(super) tools: HashMap<ColliderHandle, ToolState>,
     touch: TouchTracker,
+    /// Tools driven by servo loops ([`SurfaceSet::connect_haptic`]).
+    pub(super) links: HashMap<ColliderHandle, LinkState>,
 }
 
 impl std::fmt::Debug for SurfaceSet {
@@ -322,6 +329,7 @@ impl SurfaceSet {
             entries: Vec::new(),
             tools: HashMap::new(),
             touch: TouchTracker::default(),
+            links: HashMap::new(),
         }
     }
 
@@ -493,6 +501,7 @@ impl SurfaceSet {
         let Some(state) = self.tools.remove(&tool) else {
             return;
         };
+        self.links.remove(&tool);
         for s in self.entries.iter_mut().filter_map(|e| e.1.as_mut()) {
             s.sticks.retain(|_, st| st.0 != tool);
             s.pair_friction.remove(&tool);
@@ -757,8 +766,10 @@ impl SurfaceSet {
         rigid_step: impl FnOnce(&mut PhysicsWorld),
     ) {
         self.begin_step(&world.colliders);
+        self.drive_haptic_tools(world);
         rigid_step(world);
         self.step_surfaces(world);
+        self.publish_haptic_models(world);
     }
 
     /// Records the tools' poses at the start of a rigid step (the first half of

@@ -166,4 +166,9 @@ impl HapticDevice for SimulatedHand {
             Vector::ZERO
         };
     }
+
+    /// One [`SimulatedHand::step`]: the hand's time runs with the servo's ticks.
+    fn end_tick(&mut self) {
+        self.step();
+    }
 }

@@ -1,28 +1,44 @@
-//! The device layer for haptics (issue 14, first part): a [`HapticDevice`] trait (pose and
-//! buttons in, force out, a [`Workspace`] mapping device to world), a [`SimulatedHand`] that
-//! stands in for a user on a device in tests and examples, the [`VirtualCoupling`] that
-//! renders a tool proxy's position as a bounded, passive force, and [`Recording`]s of device
-//! trajectories (CSV).
+//! Haptics at device rate (issue 14): a servo loop on its own thread renders the contact forces
+//! of a tool at 1-10 kHz while the world steps at its own rate.
 //!
-//! No pipeline is needed: the crate's tool proxies ([`crate::hooks::TouchPipeline::tool_feedback`])
-//! or a surface's [`crate::coupling::SurfaceSet::haptic_step`] give the proxy; a device loop
-//! reads the device, moves the proxy's target, and writes the coupling's force back.
+//! - The device layer: a [`HapticDevice`] trait (pose and buttons in, force out, a
+//!   [`Workspace`] mapping device to world), a [`SimulatedHand`] that stands in for a user in
+//!   tests and examples, and [`Recording`]s of device trajectories (CSV).
+//! - The exchange: [`haptic_link`] gives a tool's two ends, a [`WorldLink`] for the world
+//!   thread ([`crate::coupling::SurfaceSet::connect_haptic`]) and a [`ServoLink`] for the
+//!   servo thread. They share wait-free triple buffers: neither side ever waits for the other,
+//!   so a world step or a refactorization never blocks the device.
+//! - The local model: after each world step the surface set publishes a [`ServoModel`] per
+//!   linked tool (the full solution's force at the tool, the contact's stiffness around it,
+//!   the surface vertices near a tool that touches nothing). Its size depends on the
+//!   contact, not on the mesh.
+//! - The loop: [`Servo`] reads the device, rests a massless proxy between the
+//!   [`VirtualCoupling`] and the model's force, renders the coupling's force (bounded; passive
+//!   under [`VirtualCoupling::max_passive_stiffness`]) and sends the proxy back; the world
+//!   moves the tool there. [`Servo::spawn`] runs it on its own thread.
+//!
+//! No pipeline is needed here; the world side lives in [`crate::coupling`].
 //!
 //! # Wiring a real device
 //! Implement [`HapticDevice`] over the device's SDK (CHAI3D, OpenHaptics, libnifalcon...):
 //! `state` reads its end effector (metres and radians in the device's frame) and buttons,
 //! `set_force` sends a force (newtons, device frame). Give it the [`Workspace`] that maps its
-//! reach onto the scene. Nothing in the crate's tests needs hardware.
-//!
-//! Not yet here (issue 14 stays open): the servo thread with its lock-free exchange and the
-//! local contact model at device rate.
+//! reach onto the scene. If the SDK runs its own servo callback, call [`Servo::tick`] from it
+//! instead of [`Servo::spawn`]. Nothing in the crate's tests needs hardware.
 
 mod hand;
+mod link;
 mod recording;
+mod servo;
+mod servo_model;
 mod virtual_coupling;
 
 pub use hand::SimulatedHand;
+pub use link::{haptic_link, DeviceSample, ServoLink, WorldLink};
 pub use recording::{Recording, RecordingError};
+pub use servo::{Servo, ServoReport, ServoThread, ServoTick, TickRecord};
+pub(crate) use servo_model::positive_part;
+pub use servo_model::{PatchVertex, ServoModel};
 pub use virtual_coupling::VirtualCoupling;
 
 use crate::math::{Pose, Real, Vector};
@@ -104,4 +120,7 @@ pub trait HapticDevice: Send {
     fn workspace(&self) -> Workspace {
         Workspace::default()
     }
+    /// Called once at the end of every servo tick, after [`HapticDevice::set_force`]. A real
+    /// device has nothing to do (its time runs by itself); a simulated one advances one tick.
+    fn end_tick(&mut self) {}
 }

@@ -58,6 +58,7 @@ macro_rules! stepped_soft_scene {
 
 mod ball_on_plate;
 mod compare;
+mod haptic;
 mod multi_tool;
 mod organ;
 mod stress;
@@ -68,6 +69,7 @@ pub use compare::{
     compare_world, run_compare_side, u_prism, CompareMeasure, CompareScene, CompareWorld,
     COMPARE_DROP_HEIGHT, COMPARE_FLOOR_HALF, COMPARE_SPIN, PLATE_HALF, SMALL_SCALE,
 };
+pub use haptic::HapticScene;
 pub use multi_tool::{
     multi_tool_specs, tool_script, MultiTool, MultiToolScene, OrganDome, ToolPhase, ToolShape,
     ToolSpec,

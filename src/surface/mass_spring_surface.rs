@@ -756,6 +756,16 @@ impl MassSpringSurface {
         out.clear();
         out.extend(self.pos.iter().map(|p| p.as_vec3()));
     }
+    /// The sum of the stiffnesses of vertex `i`'s edges (N/m; 0 out of range): how hard it
+    /// resists being moved while its neighbours stay put.
+    pub fn vertex_stiffness(&self, i: u32) -> Real {
+        let i = i as usize;
+        if i + 1 >= self.vertex_edge_ptr.len() {
+            return 0.0;
+        }
+        let edges = &self.vertex_edges[self.vertex_edge_ptr[i]..self.vertex_edge_ptr[i + 1]];
+        edges.iter().map(|&e| self.k[e as usize]).sum::<f64>() as Real
+    }
     /// Mass of vertex `i`.
     pub fn mass(&self, i: u32) -> Real {
         self.mass[i as usize] as Real
@@ -1017,6 +1027,14 @@ impl MassSpringSurface {
     /// Is vertex `i` held?
     pub fn is_held(&self, i: u32) -> bool {
         self.held.get(i as usize).copied().unwrap_or(false)
+    }
+    /// The normal a sliding hold on vertex `i` supports; zero for a full hold, a vertex not
+    /// held, or one out of range.
+    pub(crate) fn held_normal(&self, i: u32) -> Vector {
+        match self.held.get(i as usize) {
+            Some(true) => self.held_normal[i as usize].as_vec3(),
+            _ => Vector::ZERO,
+        }
     }
 
     fn check_vertex(&self, i: u32) -> Result<(), SurfaceError> {

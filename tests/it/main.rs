@@ -9,6 +9,7 @@ mod every_scale;
 mod fig4;
 mod friction;
 mod gltf_input;
+mod haptic_servo;
 mod haptics;
 mod main_loop;
 mod mesh_inputs;

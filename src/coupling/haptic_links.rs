@@ -1,0 +1,300 @@
+//! The world's side of haptic links ([`crate::haptics`]): each linked tool is moved to its
+//! servo loop's proxy before the rigid step, and after the surfaces' step the set publishes the
+//! tool's local contact model.
+
+use super::holding::attached_with_pose;
+use super::surface_set::{CouplingError, SurfaceSet};
+use crate::haptics::{positive_part, PatchVertex, ServoModel, WorldLink};
+use crate::math::{Matrix, Pose, Real, Vector};
+use rapier3d::geometry::{ColliderHandle, SharedShape};
+use rapier3d::pipeline::PhysicsWorld;
+
+/// Most patch vertices handed to a servo loop (the nearest are kept).
+const MAX_PATCH: usize = 4096;
+
+/// A first touch is rendered with this share of the touched vertex's spring stiffness (the sum
+/// over its edges, what it resists with while its neighbours have not moved yet): the static
+/// stiffness of one vertex of a membrane with free neighbours is a fraction of it. The next
+/// world update replaces the estimate with the full solution and its secant.
+const FIRST_TOUCH_SHARE: Real = 0.5;
+
+/// One linked tool on the world's side.
+#[derive(Debug)]
+pub(super) struct LinkState {
+    link: WorldLink,
+    /// The vertices and points the tool held at the last update.
+    held: usize,
+    /// The last model published (its force and pose for the secant, its patch for a first
+    /// touch).
+    last: ServoModel,
+}
+
+impl SurfaceSet {
+    /// Links `tool` to a servo loop (the servo end of `link` drives it, see
+    /// [`crate::haptics`]): before each [`SurfaceSet::step`] the tool moves to the servo
+    /// loop's latest proxy (`set_next_kinematic_position` for a kinematic body, the collider's
+    /// pose for a collider with no body), and after it the set publishes the tool's
+    /// [`ServoModel`]. The tool is registered ([`SurfaceSet::add_tool`]) if it was not. A tool
+    /// linked again drops its old link (whose servo loop then renders nothing).
+    ///
+    /// The model's stiffness is the secant of the full solution between world updates (a
+    /// symmetric Broyden update along the tool's motion, negative curvature dropped): what the
+    /// next update will report, within the surface's own relaxation between updates. The
+    /// filter's columns at the contact vertices, which the constraint solve uses, give the
+    /// surface's response within one substep, dominated by the vertices' inertia (ten times
+    /// stiffer than the next world update on the crate's scenes) and are not used for it.
+    ///
+    /// # Errors
+    /// [`CouplingError::NoSuchCollider`], [`CouplingError::ZeroSizeTool`] as
+    /// [`SurfaceSet::add_tool`]; [`CouplingError::DynamicHapticTool`] for a tool on a dynamic
+    /// body (its motion is rapier's, not the device's). Nothing changes then.
+    pub fn connect_haptic(
+        &mut self,
+        tool: ColliderHandle,
+        link: WorldLink,
+        world: &mut PhysicsWorld,
+    ) -> Result<(), CouplingError> {
+        let c = world
+            .colliders
+            .get(tool)
+            .ok_or(CouplingError::NoSuchCollider)?;
+        if c.parent()
+            .and_then(|b| world.bodies.get(b))
+            .is_some_and(|b| b.is_dynamic())
+        {
+            return Err(CouplingError::DynamicHapticTool);
+        }
+        self.add_tool(tool, world)?;
+        self.links.insert(
+            tool,
+            LinkState {
+                link,
+                held: 0,
+                last: ServoModel::default(),
+            },
+        );
+        Ok(())
+    }
+
+    /// Unlinks `tool` and gives its world end back (the tool stays a tool, where its last
+    /// proxy put it).
+    pub fn disconnect_haptic(&mut self, tool: ColliderHandle) -> Option<WorldLink> {
+        self.links.remove(&tool).map(|s| s.link)
+    }
+
+    /// The model last published for `tool` (`None` for a tool not linked).
+    pub fn haptic_model(&self, tool: ColliderHandle) -> Option<&ServoModel> {
+        self.links.get(&tool).map(|s| &s.last)
+    }
+
+    /// Whether `tool` is linked to a servo loop.
+    pub fn is_haptic(&self, tool: ColliderHandle) -> bool {
+        self.links.contains_key(&tool)
+    }
+
+    /// Moves each linked tool to its servo loop's latest proxy (after the start poses are
+    /// recorded, so the surfaces sweep the motion).
+    pub(crate) fn drive_haptic_tools(&mut self, world: &mut PhysicsWorld) {
+        self.links.retain(|h, _| world.colliders.contains(*h));
+        for (h, state) in self.links.iter_mut() {
+            let sample = state.link.device();
+            if sample.tick == 0 || !sample.proxy.is_finite() {
+                continue;
+            }
+            let Some(c) = world.colliders.get_mut(*h) else {
+                continue;
+            };
+            match c.parent() {
+                Some(b) => {
+                    if let Some(body) = world.bodies.get_mut(b) {
+                        if body.is_kinematic() {
+                            let to_body = c.position_wrt_parent().copied();
+                            let pose = to_body.map_or(sample.proxy, |p| sample.proxy * p.inverse());
+                            body.set_next_kinematic_position(pose);
+                        }
+                    }
+                }
+                None => c.set_position(sample.proxy),
+            }
+        }
+    }
+
+    /// Publishes each linked tool's model from the step just taken.
+    pub(crate) fn publish_haptic_models(&mut self, world: &PhysicsWorld) {
+        let handles: Vec<ColliderHandle> = self.links.keys().copied().collect();
+        for h in handles {
+            let Some(c) = world.colliders.get(h) else {
+                continue;
+            };
+            let pose = *c.position();
+            let shape = c.shared_shape().clone();
+            let (force, grasping, held) =
+                self.tools.get(&h).map_or((Vector::ZERO, false, 0), |t| {
+                    let r = &t.reaction;
+                    (r.force, t.grasp, r.held_vertices + r.pressed_points)
+                });
+            let force = if force.is_finite() {
+                force
+            } else {
+                Vector::ZERO
+            };
+            let Some(state) = self.links.get(&h) else {
+                continue;
+            };
+            let touched = if force != Vector::ZERO && !state.last.in_contact() {
+                touched_stiffness(self, world, &shape, &pose)
+            } else {
+                0.0
+            };
+            let Some(state) = self.links.get(&h) else {
+                continue;
+            };
+            // A change of the held set is a jump of the solution, not a stiffness: the last
+            // stiffness carries over it.
+            let stiffness =
+                if held != state.held && state.last.in_contact() && force != Vector::ZERO {
+                    state.last.stiffness
+                } else {
+                    secant(&state.last, &pose, force, &shape, touched)
+                };
+            let patch = if force == Vector::ZERO {
+                patch_near(self, world, &shape, &pose)
+            } else {
+                Vec::new()
+            };
+            let model = ServoModel {
+                sequence: 0,
+                tool_pose: pose,
+                force,
+                stiffness,
+                grasping,
+                shape: Some(shape),
+                patch,
+                attached: true,
+            };
+            if let Some(state) = self.links.get_mut(&h) {
+                state.held = held;
+                state.link.publish(model.clone());
+                state.last = model;
+                state.last.sequence = state.link.sequence();
+            }
+        }
+    }
+}
+
+/// The contact's stiffness for the new model: zero out of contact; at a first touch, the last
+/// model's patch stiffness scaled to the force found (or, when the patch saw a much weaker or
+/// no touch there, the touched vertices' first-touch stiffness along the force); in contact,
+/// the last stiffness updated along the motion to agree with the change of force (symmetric,
+/// negative curvature dropped).
+fn secant(
+    last: &ServoModel,
+    pose: &Pose,
+    force: Vector,
+    shape: &SharedShape,
+    touched: Real,
+) -> Matrix {
+    if force == Vector::ZERO {
+        return Matrix::ZERO;
+    }
+    let x = pose.translation;
+    if !last.in_contact() {
+        let (predicted, k) = last.force_and_stiffness_at(x);
+        let scale = force.length() / predicted.length();
+        if scale.is_finite() && (0.2..=5.0).contains(&scale) {
+            return k * scale;
+        }
+        let n = force.normalize();
+        return outer(n, n) * touched;
+    }
+    let s = x - last.tool_pose.translation;
+    let size = shape.compute_local_aabb().half_extents().max_element();
+    if s.length() <= (1e-3 * size).max(1e-7) {
+        return last.stiffness;
+    }
+    // K s should be the drop of force along s: y = f_last - f.
+    let y = last.force - force;
+    let k = last.stiffness;
+    let r = y - k * s;
+    let ss = s.dot(s);
+    // The symmetric rank-two update closest to K with K s = y (Powell-symmetric Broyden).
+    let updated = k + (outer(r, s) + outer(s, r)) / ss - outer(s, s) * (r.dot(s) / (ss * ss));
+    let psd = positive_part(&updated);
+    if updated.is_finite() {
+        psd
+    } else {
+        k
+    }
+}
+
+/// `a bᵀ`.
+fn outer(a: Vector, b: Vector) -> Matrix {
+    Matrix::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// The first-touch stiffness of the surface vertices on or in the tool at `pose` (those it
+/// holds), summed.
+fn touched_stiffness(
+    set: &mut SurfaceSet,
+    world: &PhysicsWorld,
+    shape: &SharedShape,
+    pose: &Pose,
+) -> Real {
+    let aabb = shape.compute_aabb(pose);
+    let size = shape.compute_local_aabb().half_extents().max_element();
+    let margin = Vector::splat(1e-3 * size);
+    let (lo, hi) = (aabb.mins - margin, aabb.maxs + margin);
+    let mut k = 0.0;
+    for (_, s, body) in attached_with_pose(&mut set.entries, world) {
+        let surface = &s.surface;
+        for i in 0..surface.num_vertices() as u32 {
+            let p = body * surface.position(i);
+            if p.cmpge(lo).all()
+                && p.cmple(hi).all()
+                && shape.distance_to_point(pose, p, true) <= 1e-3 * size
+            {
+                k += FIRST_TOUCH_SHARE * surface.vertex_stiffness(i);
+            }
+        }
+    }
+    k
+}
+
+/// The surface vertices within one tool size of the tool's bounding box (world), each with its
+/// first-touch stiffness, nearest first when there are too many.
+fn patch_near(
+    set: &mut SurfaceSet,
+    world: &PhysicsWorld,
+    shape: &SharedShape,
+    pose: &Pose,
+) -> Vec<PatchVertex> {
+    let aabb = shape.compute_aabb(pose);
+    let reach = shape.compute_local_aabb().half_extents().max_element();
+    let (lo, hi) = (
+        aabb.mins - Vector::splat(reach),
+        aabb.maxs + Vector::splat(reach),
+    );
+    let mut patch = Vec::new();
+    for (_, s, body) in attached_with_pose(&mut set.entries, world) {
+        let surface = &s.surface;
+        for i in 0..surface.num_vertices() as u32 {
+            let p = body * surface.position(i);
+            if p.cmpge(lo).all() && p.cmple(hi).all() && !surface.is_pinned(i) {
+                patch.push(PatchVertex {
+                    position: p,
+                    stiffness: FIRST_TOUCH_SHARE * surface.vertex_stiffness(i),
+                });
+            }
+        }
+    }
+    if patch.len() > MAX_PATCH {
+        let c = pose.translation;
+        patch.select_nth_unstable_by(MAX_PATCH, |a, b| {
+            (a.position - c)
+                .length_squared()
+                .total_cmp(&(b.position - c).length_squared())
+        });
+        patch.truncate(MAX_PATCH);
+    }
+    patch
+}

@@ -1,0 +1,308 @@
+//! The servo loop: one device, one tool's [`ServoLink`], a [`VirtualCoupling`]; a tick reads the
+//! device, finds the proxy in the world's latest [`super::ServoModel`] and renders the
+//! coupling's force. [`Servo::spawn`] runs it on its own thread at a fixed rate.
+
+use super::{DeviceSample, HapticDevice, HapticsError, ServoLink, VirtualCoupling};
+use crate::math::{Pose, Real, Vector};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// A servo loop for one device and one tool.
+///
+/// Each [`Servo::tick`]: the device's pose (mapped into the world by its
+/// [`super::Workspace`]), the proxy where a massless tool rests between the coupling spring
+/// and the surfaces' force of the latest model ([`super::ServoModel::proxy`]), the
+/// coupling's force (spring, damper, bound) sent to the device, and the sample (device, proxy,
+/// force) sent back to the world, which moves the tool to the proxy at its next step.
+/// The rendered stiffness is the coupling's and the contact's in series, never above the
+/// coupling's: keep it under [`VirtualCoupling::max_passive_stiffness`] for the servo rate.
+pub struct Servo<D: HapticDevice> {
+    device: D,
+    link: ServoLink,
+    coupling: VirtualCoupling,
+    period: Real,
+    ticks: u64,
+    last: Option<(Vector, Vector)>,
+}
+
+impl<D: HapticDevice> std::fmt::Debug for Servo<D> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Servo")
+            .field("coupling", &self.coupling)
+            .field("period", &self.period)
+            .field("ticks", &self.ticks)
+            .finish_non_exhaustive()
+    }
+}
+
+/// What one servo tick did (world frame).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct ServoTick {
+    /// The device's pose in the world.
+    pub device: Pose,
+    /// The proxy's position.
+    pub proxy: Vector,
+    /// The force rendered (world; the device got it through its workspace).
+    pub force: Vector,
+    /// The surfaces' force on the proxy in the model.
+    pub surface_force: Vector,
+    /// The model's [`super::ServoModel::sequence`].
+    pub model_sequence: u64,
+    /// The model's full-solution force (at the world step's tool pose).
+    pub model_force: Vector,
+}
+
+impl<D: HapticDevice> Servo<D> {
+    /// A servo loop ticking at `rate_hz` (the rate sets the velocities the coupling's damper
+    /// sees; [`Servo::spawn`] keeps it).
+    ///
+    /// # Errors
+    /// [`HapticsError::InvalidRate`] for a rate that is not finite and positive.
+    pub fn new(
+        device: D,
+        link: ServoLink,
+        coupling: VirtualCoupling,
+        rate_hz: Real,
+    ) -> Result<Self, HapticsError> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+            return Err(HapticsError::InvalidRate(rate_hz as f64));
+        }
+        Ok(Servo {
+            device,
+            link,
+            coupling,
+            period: 1.0 / rate_hz,
+            ticks: 0,
+            last: None,
+        })
+    }
+
+    /// One tick (see the type's docs). Costs the model's contacts, not the mesh: a few
+    /// microseconds in contact, one point query per patch vertex out of contact.
+    pub fn tick(&mut self) -> ServoTick {
+        let state = self.device.state();
+        let workspace = self.device.workspace();
+        let device = workspace.to_world(&state.pose);
+        let model = self.link.model();
+        let (model_sequence, model_force) = (model.sequence, model.force);
+        let x = device.translation;
+        let (proxy, surface_force) = if x.is_finite() {
+            model.proxy(x, self.coupling.stiffness)
+        } else {
+            (x, Vector::ZERO)
+        };
+        let (dv, pv) = match self.last {
+            Some((d, p)) => ((x - d) / self.period, (proxy - p) / self.period),
+            None => (Vector::ZERO, Vector::ZERO),
+        };
+        let force = if proxy.is_finite() && x.is_finite() {
+            self.coupling.force(x, dv, proxy, pv)
+        } else {
+            Vector::ZERO
+        };
+        self.device.set_force(workspace.force_to_device(force));
+        self.device.end_tick();
+        self.last = Some((x, proxy)).filter(|(a, b)| a.is_finite() && b.is_finite());
+        self.ticks += 1;
+        self.link.send(DeviceSample {
+            tick: self.ticks,
+            device,
+            proxy: Pose::from_parts(proxy, device.rotation),
+            buttons: state.buttons,
+            force,
+            model_sequence,
+        });
+        ServoTick {
+            device,
+            proxy,
+            force,
+            surface_force,
+            model_sequence,
+            model_force,
+        }
+    }
+
+    /// The device.
+    pub fn device(&self) -> &D {
+        &self.device
+    }
+
+    /// The device, mutably.
+    pub fn device_mut(&mut self) -> &mut D {
+        &mut self.device
+    }
+
+    /// Ticks so far.
+    pub fn ticks(&self) -> u64 {
+        self.ticks
+    }
+
+    /// The tick period (s).
+    pub fn period(&self) -> Real {
+        self.period
+    }
+}
+
+impl<D: HapticDevice + 'static> Servo<D> {
+    /// Runs the loop on its own thread, one tick per period (sleeping, then spinning the
+    /// last 150 µs to the deadline, since a sleep overshoots by tens of microseconds), until
+    /// [`ServoThread::stop`]. A tick that overruns its deadline by a whole period moves the
+    /// schedule on instead of bursting to catch up. The first `record` ticks are recorded
+    /// for [`ServoReport`] (allocated here, not while running).
+    pub fn spawn(self, record: usize) -> ServoThread<D> {
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let handle = std::thread::spawn(move || run(self, &flag, record));
+        ServoThread {
+            stop,
+            handle: Some(handle),
+        }
+    }
+}
+
+/// One recorded tick.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct TickRecord {
+    /// Seconds since the loop started.
+    pub time: f64,
+    /// How long the tick took (s): reading the device and the model, the proxy, the force.
+    pub latency: f64,
+    /// The force rendered (world).
+    pub force: Vector,
+    /// The model it read.
+    pub model_sequence: u64,
+}
+
+/// What a servo thread did.
+#[derive(Clone, Debug, Default)]
+pub struct ServoReport {
+    /// Ticks run.
+    pub ticks: u64,
+    /// Wall time from the first tick to the stop (s).
+    pub elapsed: f64,
+    /// Ticks that started a whole period late.
+    pub overruns: u64,
+    /// The first ticks.
+    pub records: Vec<TickRecord>,
+}
+
+impl ServoReport {
+    /// Ticks per second achieved.
+    pub fn rate_hz(&self) -> f64 {
+        if self.elapsed > 0.0 {
+            self.ticks as f64 / self.elapsed
+        } else {
+            0.0
+        }
+    }
+
+    /// The `q`-quantile (0 to 1) of the recorded tick latencies (s), 0 with no record.
+    pub fn latency_quantile(&self, q: f64) -> f64 {
+        quantile(self.records.iter().map(|r| r.latency), q)
+    }
+
+    /// The `q`-quantile of the recorded force magnitudes (N).
+    pub fn force_quantile(&self, q: f64) -> f64 {
+        quantile(self.records.iter().map(|r| r.force.length() as f64), q)
+    }
+
+    /// The largest change of the rendered force between consecutive recorded ticks (N):
+    /// `(between ticks that read the same model, across a new model)`.
+    pub fn largest_force_jumps(&self) -> (f64, f64) {
+        let (mut within, mut across) = (0.0f64, 0.0f64);
+        for w in self.records.windows(2) {
+            let jump = (w[1].force - w[0].force).length() as f64;
+            if w[1].model_sequence == w[0].model_sequence {
+                within = within.max(jump);
+            } else {
+                across = across.max(jump);
+            }
+        }
+        (within, across)
+    }
+}
+
+fn quantile(values: impl Iterator<Item = f64>, q: f64) -> f64 {
+    let mut v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let i = ((v.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
+    v[i]
+}
+
+/// A servo loop running on its own thread.
+#[derive(Debug)]
+pub struct ServoThread<D: HapticDevice> {
+    stop: Arc<AtomicBool>,
+    handle: Option<JoinHandle<(Servo<D>, ServoReport)>>,
+}
+
+impl<D: HapticDevice> ServoThread<D> {
+    /// Stops the loop after its current tick and gives back the servo (and its device) with
+    /// the report; `None` if the thread panicked.
+    pub fn stop(mut self) -> Option<(Servo<D>, ServoReport)> {
+        self.stop.store(true, Ordering::Release);
+        self.handle.take()?.join().ok()
+    }
+}
+
+impl<D: HapticDevice> Drop for ServoThread<D> {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
+        if let Some(h) = self.handle.take() {
+            let _ = h.join();
+        }
+    }
+}
+
+/// The last stretch before a deadline is spun, not slept.
+const SPIN: Duration = Duration::from_micros(150);
+
+fn run<D: HapticDevice>(
+    mut servo: Servo<D>,
+    stop: &AtomicBool,
+    record: usize,
+) -> (Servo<D>, ServoReport) {
+    let period = Duration::from_secs_f64(servo.period as f64);
+    let mut report = ServoReport {
+        records: Vec::with_capacity(record),
+        ..ServoReport::default()
+    };
+    let start = Instant::now();
+    let mut deadline = start;
+    while !stop.load(Ordering::Acquire) {
+        let t0 = Instant::now();
+        let tick = servo.tick();
+        let t1 = Instant::now();
+        report.ticks += 1;
+        if report.records.len() < record {
+            report.records.push(TickRecord {
+                time: (t0 - start).as_secs_f64(),
+                latency: (t1 - t0).as_secs_f64(),
+                force: tick.force,
+                model_sequence: tick.model_sequence,
+            });
+        }
+        deadline += period;
+        let now = Instant::now();
+        if now > deadline + period {
+            report.overruns += 1;
+            deadline = now;
+            continue;
+        }
+        if let Some(rest) = deadline.checked_duration_since(now) {
+            if rest > SPIN {
+                std::thread::sleep(rest - SPIN);
+            }
+        }
+        while Instant::now() < deadline {
+            std::hint::spin_loop();
+        }
+    }
+    report.elapsed = start.elapsed().as_secs_f64();
+    (servo, report)
+}

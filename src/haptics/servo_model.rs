@@ -1,0 +1,184 @@
+//! The local contact model a world step hands to a servo loop, and how the servo loop reads it
+//! at device rate.
+
+use crate::math::{Matrix, Pose, Real, Vector};
+use parry3d::math::MatExt;
+use rapier3d::geometry::SharedShape;
+
+/// A surface vertex near a tool that was not in contact with it at the last world step (world
+/// frame, as that step left it), and the stiffness it resists a first touch with.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PatchVertex {
+    /// Its position (world) at the last world step.
+    pub position: Vector,
+    /// How hard it pushes back per metre it is pushed in (N/m).
+    pub stiffness: Real,
+}
+
+/// What one tool's servo loop needs between two world steps: the full surface solution's force
+/// at the tool pose the world stepped to, the contact's stiffness around it, and, while the
+/// tool touches nothing, the surface vertices near it (for contacts that start between world
+/// steps). Its size depends on the contact and the tool's neighbourhood, not on the mesh.
+///
+/// Between world updates the servo loop renders
+/// - in contact (`force` not zero): `force - stiffness · (x - x₀)` for the tool's reference
+///   point at `x` (`x₀` the pose the world stepped to), the linearisation of the surface's
+///   force around the last full solution; the contact lets go (no force at all) where the
+///   part along `force` would turn into a pull, unless the tool grasps;
+/// - out of contact: each [`PatchVertex`] the tool's shape contains at `x` (turned as at the
+///   world step) pushes the tool out with its stiffness times its depth.
+///
+/// Rotation is not rendered: the model is for the tool's translation (a 3-DoF device); a
+/// 6-DoF device gets no torque from it. The contact's tangential (friction) force is carried
+/// in `force` and in `stiffness` like the normal one.
+///
+/// # Example
+/// A contact pushing up with 2 N at the origin, 100 N/m stiff along y:
+/// ```
+/// use rapier_touch::haptics::ServoModel;
+/// use rapier_touch::prelude::{Pose, Vector};
+/// use rapier_touch::rapier3d::math::Matrix;
+///
+/// let model = ServoModel {
+///     sequence: 1,
+///     tool_pose: Pose::IDENTITY,
+///     force: Vector::new(0.0, 2.0, 0.0),
+///     stiffness: Matrix::from_diagonal(Vector::new(0.0, 100.0, 0.0)),
+///     ..ServoModel::default()
+/// };
+/// // 1 cm deeper: 3 N; 3 cm out: contact lost, no force.
+/// assert!((model.force_at(Vector::new(0.0, -0.01, 0.0)).y - 3.0).abs() < 1e-4);
+/// assert_eq!(model.force_at(Vector::new(0.0, 0.03, 0.0)), Vector::ZERO);
+/// ```
+#[derive(Clone, Debug)]
+pub struct ServoModel {
+    /// How many world updates the link has published (0: none yet; a new model, a new number).
+    pub sequence: u64,
+    /// The tool's pose at the world step (its reference point is `tool_pose.translation`).
+    pub tool_pose: Pose,
+    /// The surfaces' force on the tool at `tool_pose` (world, N): the full solution.
+    pub force: Vector,
+    /// The contact's stiffness around `tool_pose` (N/m, symmetric positive semi-definite).
+    pub stiffness: Matrix,
+    /// Whether the tool grasps: its contact may pull.
+    pub grasping: bool,
+    /// The tool's shape, for contacts that start between world steps.
+    pub shape: Option<SharedShape>,
+    /// Surface vertices near the tool, not in contact (empty while in contact).
+    pub patch: Vec<PatchVertex>,
+    /// `false` when the world side has let the tool go (removed, disconnected, or dropped):
+    /// nothing is rendered.
+    pub attached: bool,
+}
+
+impl Default for ServoModel {
+    /// No world update yet: no force anywhere.
+    fn default() -> Self {
+        ServoModel {
+            sequence: 0,
+            tool_pose: Pose::IDENTITY,
+            force: Vector::ZERO,
+            stiffness: Matrix::ZERO,
+            grasping: false,
+            shape: None,
+            patch: Vec::new(),
+            attached: true,
+        }
+    }
+}
+
+/// Newton iterations of the proxy solve (the force is piecewise linear: a few settle it).
+const PROXY_ITERATIONS: usize = 8;
+
+impl ServoModel {
+    /// Whether the tool was in contact at the world step.
+    pub fn in_contact(&self) -> bool {
+        self.force != Vector::ZERO
+    }
+
+    /// The surfaces' force on the tool with its reference point at `x` (world), and its
+    /// stiffness there (`-∂f/∂x`). Not finite inputs give no force.
+    pub fn force_and_stiffness_at(&self, x: Vector) -> (Vector, Matrix) {
+        if !self.attached || !x.is_finite() {
+            return (Vector::ZERO, Matrix::ZERO);
+        }
+        if self.in_contact() {
+            let f = self.force - self.stiffness * (x - self.tool_pose.translation);
+            let along = self.force.normalize_or_zero();
+            if !f.is_finite() || (!self.grasping && f.dot(along) < 0.0) {
+                return (Vector::ZERO, Matrix::ZERO);
+            }
+            return (f, self.stiffness);
+        }
+        let Some(shape) = &self.shape else {
+            return (Vector::ZERO, Matrix::ZERO);
+        };
+        let pose = Pose::from_parts(x, self.tool_pose.rotation);
+        let (mut f, mut k) = (Vector::ZERO, Matrix::ZERO);
+        for v in &self.patch {
+            let proj = shape.project_point(&pose, v.position, false);
+            if !proj.is_inside {
+                continue;
+            }
+            let out = v.position - proj.point;
+            let depth = out.length();
+            if depth > 0.0 {
+                let n = out / depth;
+                f += n * (v.stiffness * depth);
+                k += Matrix::from_cols(n * n.x, n * n.y, n * n.z) * v.stiffness;
+            }
+        }
+        (f, k)
+    }
+
+    /// [`ServoModel::force_and_stiffness_at`]'s force.
+    pub fn force_at(&self, x: Vector) -> Vector {
+        self.force_and_stiffness_at(x).0
+    }
+
+    /// The proxy of a device at `device` (world) held to it by a spring of
+    /// `coupling_stiffness` (N/m): where a massless tool rests between that spring and the
+    /// surfaces (`k (device - proxy) + f(proxy) = 0`), and the surfaces' force there. Newton
+    /// steps on the piecewise linear force, from the device's position.
+    pub fn proxy(&self, device: Vector, coupling_stiffness: Real) -> (Vector, Vector) {
+        let kc = coupling_stiffness.max(0.0);
+        let mut x = device;
+        let (mut f, mut k) = self.force_and_stiffness_at(x);
+        if f == Vector::ZERO || kc == 0.0 || !device.is_finite() {
+            return (x, f);
+        }
+        let residual = |x: Vector, f: Vector| (device - x) * kc + f;
+        let mut r = residual(x, f);
+        for _ in 0..PROXY_ITERATIONS {
+            // The contact's positive part: a stiffness that falls along the motion (a
+            // deformed surface pushing the tool on) does not steer the steps.
+            let jac = Matrix::from_diagonal(Vector::splat(kc)) + positive_part(&k);
+            let Some(step) = Some(jac.inverse() * r).filter(|s| s.is_finite()) else {
+                break;
+            };
+            let x_new = x + step;
+            let (f_new, k_new) = self.force_and_stiffness_at(x_new);
+            let r_new = residual(x_new, f_new);
+            if r_new.length() >= r.length() {
+                break;
+            }
+            (x, f, k, r) = (x_new, f_new, k_new, r_new);
+            if r.length() <= 1e-6 * (f.length() + kc * 1e-6) {
+                break;
+            }
+        }
+        (x, f)
+    }
+}
+
+/// The positive semi-definite part of a symmetric matrix (negative eigenvalues dropped).
+pub(crate) fn positive_part(m: &Matrix) -> Matrix {
+    let eig = m.symmetric_eigen();
+    let v = eig.eigenvectors;
+    let psd = v * Matrix::from_diagonal(eig.eigenvalues.max(Vector::ZERO)) * v.transpose();
+    if psd.is_finite() {
+        psd
+    } else {
+        Matrix::ZERO
+    }
+}
