@@ -232,8 +232,8 @@ fn outer(a: Vector, b: Vector) -> Matrix {
     Matrix::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
-/// The first-touch stiffness of the surface vertices on or in the tool at `pose` (those it
-/// holds), summed.
+/// The largest first-touch stiffness of the surface vertices on or in the tool at `pose` (those
+/// it holds): one contact point, as in [`ServoModel`]'s first touch.
 fn touched_stiffness(
     set: &mut SurfaceSet,
     world: &PhysicsWorld,
@@ -253,7 +253,7 @@ fn touched_stiffness(
                 && p.cmple(hi).all()
                 && shape.distance_to_point(pose, p, true) <= 1e-3 * size
             {
-                k += FIRST_TOUCH_SHARE * surface.vertex_stiffness(i);
+                k = Real::max(k, FIRST_TOUCH_SHARE * surface.vertex_stiffness(i));
             }
         }
     }

@@ -148,8 +148,9 @@ impl<D: HapticDevice> Servo<D> {
 impl<D: HapticDevice + 'static> Servo<D> {
     /// Runs the loop on its own thread, one tick per period (sleeping, then spinning the
     /// last 150 µs to the deadline, since a sleep overshoots by tens of microseconds), until
-    /// [`ServoThread::stop`]. A tick that overruns its deadline by a whole period moves the
-    /// schedule on instead of bursting to catch up. The first `record` ticks are recorded
+    /// [`ServoThread::stop`]. A loop that fell behind (descheduled by the OS) runs its late
+    /// ticks back to back to keep the rate; more than 20 periods behind, it restarts its
+    /// schedule instead (counted in [`ServoReport::overruns`]). The first `record` ticks are recorded
     /// for [`ServoReport`] (allocated here, not while running).
     pub fn spawn(self, record: usize) -> ServoThread<D> {
         let stop = Arc::new(AtomicBool::new(false));
@@ -182,7 +183,7 @@ pub struct ServoReport {
     pub ticks: u64,
     /// Wall time from the first tick to the stop (s).
     pub elapsed: f64,
-    /// Ticks that started a whole period late.
+    /// Times the loop was more than 20 periods behind and restarted its schedule.
     pub overruns: u64,
     /// The first ticks.
     pub records: Vec<TickRecord>,
@@ -262,6 +263,10 @@ impl<D: HapticDevice> Drop for ServoThread<D> {
 /// The last stretch before a deadline is spun, not slept.
 const SPIN: Duration = Duration::from_micros(150);
 
+/// A loop late by up to this many periods catches up (ticks back to back); later than that it
+/// restarts its schedule.
+const CATCH_UP: u32 = 20;
+
 fn run<D: HapticDevice>(
     mut servo: Servo<D>,
     stop: &AtomicBool,
@@ -289,7 +294,8 @@ fn run<D: HapticDevice>(
         }
         deadline += period;
         let now = Instant::now();
-        if now > deadline + period {
+        if now > deadline + CATCH_UP * period {
+            // Too far behind (the thread was descheduled): start the schedule again from now.
             report.overruns += 1;
             deadline = now;
             continue;

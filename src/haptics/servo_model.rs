@@ -25,8 +25,11 @@ pub struct PatchVertex {
 ///   point at `x` (`x₀` the pose the world stepped to), the linearisation of the surface's
 ///   force around the last full solution; the contact lets go (no force at all) where the
 ///   part along `force` would turn into a pull, unless the tool grasps;
-/// - out of contact: each [`PatchVertex`] the tool's shape contains at `x` (turned as at the
-///   world step) pushes the tool out with its stiffness times its depth.
+/// - out of contact: the deepest [`PatchVertex`] the tool's shape contains at `x` (turned as at
+///   the world step) pushes the tool out with its stiffness times its depth. One point, not a
+///   sum over the vertices inside: a membrane's stiffness under a tool does not grow with the
+///   number of vertices the tool covers (it is about `2πT / ln(R/a)` for tension `T`, span `R`
+///   and contact radius `a`), so a sum would make a fine mesh feel as many times stiffer.
 ///
 /// Rotation is not rendered: the model is for the tool's translation (a 3-DoF device); a
 /// 6-DoF device gets no torque from it. The contact's tangential (friction) force is carried
@@ -114,7 +117,8 @@ impl ServoModel {
             return (Vector::ZERO, Matrix::ZERO);
         };
         let pose = Pose::from_parts(x, self.tool_pose.rotation);
-        let (mut f, mut k) = (Vector::ZERO, Matrix::ZERO);
+        // The deepest vertex inside the tool: (depth, direction out, stiffness).
+        let mut deepest: Option<(Real, Vector, Real)> = None;
         for v in &self.patch {
             let proj = shape.project_point(&pose, v.position, false);
             if !proj.is_inside {
@@ -122,13 +126,17 @@ impl ServoModel {
             }
             let out = v.position - proj.point;
             let depth = out.length();
-            if depth > 0.0 {
-                let n = out / depth;
-                f += n * (v.stiffness * depth);
-                k += Matrix::from_cols(n * n.x, n * n.y, n * n.z) * v.stiffness;
+            if depth > 0.0 && deepest.is_none_or(|d| depth > d.0) {
+                deepest = Some((depth, out / depth, v.stiffness));
             }
         }
-        (f, k)
+        match deepest {
+            Some((depth, n, k)) if (n * (k * depth)).is_finite() => (
+                n * (k * depth),
+                Matrix::from_cols(n * n.x, n * n.y, n * n.z) * k,
+            ),
+            _ => (Vector::ZERO, Matrix::ZERO),
+        }
     }
 
     /// [`ServoModel::force_and_stiffness_at`]'s force.
