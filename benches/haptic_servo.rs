@@ -17,7 +17,6 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rapier_touch::haptics::{Servo, ServoLink, SimulatedHand, VirtualCoupling};
-use rapier_touch::prelude::*;
 use rapier_touch::scenes::HapticScene;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

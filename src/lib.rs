@@ -35,9 +35,10 @@
 //! - [`coupling`]: soft surfaces on rapier bodies, pressed by rigid tools.
 //! - [`hooks`]: the rapier integration: [`hooks::TouchPipeline`] steps a `PhysicsWorld` with
 //!   [`hooks::TouchHooks`], a step guard against tunneling, tool proxies and contact reports.
-//! - [`haptics`]: the device layer (no pipeline): a device trait with a workspace mapping, a
-//!   simulated hand for tests, the virtual coupling with its passive stiffness, CSV
-//!   recordings of device trajectories.
+//! - [`haptics`]: device-rate haptics (no pipeline): a device trait with a workspace mapping,
+//!   a simulated hand for tests, the virtual coupling with its passive stiffness, CSV
+//!   recordings of device trajectories, and the servo loop on its own thread that renders a
+//!   local contact model the world publishes through wait-free links.
 //! - `bevy_plugin` (feature `bevy`): the same in bevy_rapier3d 0.37's schedule: components
 //!   for tracked colliders, soft surfaces and tools, the hooks through bevy_rapier's hook
 //!   mechanism, the guard and the surfaces after its step.

@@ -493,6 +493,7 @@ pub(super) fn constrain(
     }
     // P restricted to the involved vertices (h × h), one column read each.
     let mut p_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
+    filter.prepare_columns(&list);
     for (b, &fj) in list.iter().enumerate() {
         filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
     }
