@@ -6,7 +6,7 @@
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{find_contacts, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
-use super::tool_shape::ToolShape;
+use super::tool_shape::{contact_margin, ToolShape};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -191,7 +191,7 @@ fn retarget_holds(
             let shape = t.shape.query.as_deref().unwrap_or(collider.shape());
             let (start, end) = (*inv * t.start, *inv * t.end);
             let aabb = shape.compute_aabb(&start);
-            let margin = 1e-5 * (1.0 + aabb.extents().max_element());
+            let margin = contact_margin(&aabb, 1e-5);
             Some((shape, start, end, aabb.loosened(margin), margin))
         })
         .collect();
@@ -262,8 +262,8 @@ pub(super) fn hold_vertices(
     positions: &[Vector],
 ) -> Holds {
     let aabb: Aabb = shape.compute_aabb(pose);
-    let aabb = aabb.loosened(1e-6 * (1.0 + aabb.extents().max_element()));
-    let margin = 1e-6 * (1.0 + aabb.extents().max_element());
+    let margin = contact_margin(&aabb, 1e-6);
+    let aabb = aabb.loosened(margin);
     let motion = pose.translation - before.translation;
     // The velocity of the tool's material point at `local` (tool frame) over the substep.
     let material_velocity = |local: Vector| {

@@ -6,6 +6,7 @@
 //! the filter's constraint solve. The tool gets the impulses those holds gave: the press's own
 //! velocity change and the next surface step's constraint impulse.
 
+use super::tool_shape::contact_margin;
 use crate::geometry::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, PointPress};
@@ -75,7 +76,7 @@ pub(super) fn find_contacts(
 ) {
     let local = mesh.local_aabb();
     let swept: Aabb = local.transform_by(start).merged(&local.transform_by(end));
-    let margin = 1e-6 * (1.0 + swept.extents().max_element());
+    let margin = contact_margin(&swept, 1e-6);
     let snapshot = SurfaceSnapshot {
         before,
         now,

@@ -3,7 +3,7 @@
 //! edges press the surface between its vertices.
 
 use crate::geometry::TouchMesh;
-use crate::math::Pose;
+use crate::math::{Pose, Real};
 use parry3d::shape::{Shape, SharedShape, TriMeshFlags};
 
 /// A tool's shape as the coupling uses it.
@@ -77,4 +77,20 @@ fn oriented(shape: &dyn Shape) -> Option<SharedShape> {
         mesh.flags() | TriMeshFlags::ORIENTED,
     )
     .ok()
+}
+
+/// The contact tolerance for a tool whose bounds are `aabb`: `fraction` of its size, plus a
+/// few f32 steps of its coordinates (a tool far from the origin cannot place points closer
+/// than that). Relative, with no absolute floor: a fixed floor (it was `fraction × (1 m +
+/// size)`) is a micrometre on a 0.1 mm tool, ten percent of a typical press there, and made
+/// every slow slip of such a tool read as rest.
+pub(super) fn contact_margin(aabb: &parry3d::bounding_volume::Aabb, fraction: Real) -> Real {
+    let size = aabb.extents().max_element();
+    let reach = aabb.mins.abs().max(aabb.maxs.abs()).max_element();
+    let margin = fraction * size + 8.0 * Real::EPSILON * reach;
+    if margin.is_finite() && margin > 0.0 {
+        margin
+    } else {
+        Real::MIN_POSITIVE
+    }
 }
