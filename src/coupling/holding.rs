@@ -191,7 +191,7 @@ fn retarget_holds(
             let shape = t.shape.query.as_deref().unwrap_or(collider.shape());
             let (start, end) = (*inv * t.start, *inv * t.end);
             let aabb = shape.compute_aabb(&start);
-            let margin = contact_margin(&aabb, 1e-5);
+            let margin = contact_margin(&aabb, 1e-3);
             Some((shape, start, end, aabb.loosened(margin), margin))
         })
         .collect();
@@ -262,7 +262,7 @@ pub(super) fn hold_vertices(
     positions: &[Vector],
 ) -> Holds {
     let aabb: Aabb = shape.compute_aabb(pose);
-    let margin = contact_margin(&aabb, 1e-6);
+    let margin = contact_margin(&aabb, 1e-4);
     let aabb = aabb.loosened(margin);
     let motion = pose.translation - before.translation;
     // The velocity of the tool's material point at `local` (tool frame) over the substep.
@@ -357,7 +357,11 @@ pub(super) fn hold_vertices(
     };
     // A vertex moving over the tool slower than this (a millionth of the tool's size per
     // substep) is at rest on it.
-    let slip_eps = if h > 0.0 { margin / h } else { Real::MAX };
+    let slip_eps = if h > 0.0 {
+        1e-6 * aabb.extents().max_element() / h
+    } else {
+        Real::MAX
+    };
     for &(i, n, local, was_stuck) in &held {
         let f = surface.internal_force(i);
         let (on_tool, next) = if grasp {

@@ -76,7 +76,7 @@ pub(super) fn find_contacts(
 ) {
     let local = mesh.local_aabb();
     let swept: Aabb = local.transform_by(start).merged(&local.transform_by(end));
-    let margin = contact_margin(&swept, 1e-6);
+    let margin = contact_margin(&swept, 1e-4);
     let snapshot = SurfaceSnapshot {
         before,
         now,

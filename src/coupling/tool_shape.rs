@@ -81,9 +81,9 @@ fn oriented(shape: &dyn Shape) -> Option<SharedShape> {
 
 /// The contact tolerance for a tool whose bounds are `aabb`: `fraction` of its size, plus a
 /// few f32 steps of its coordinates (a tool far from the origin cannot place points closer
-/// than that). Relative, with no absolute floor: a fixed floor (it was `fraction × (1 m +
-/// size)`) is a micrometre on a 0.1 mm tool, ten percent of a typical press there, and made
-/// every slow slip of such a tool read as rest.
+/// than that). Relative, with no absolute floor: the tolerances were `f × (1 m + size)` with a
+/// hundredth of today's fractions, the same on a centimetre tool, but a micrometre on a
+/// 0.1 mm one (a tenth of a typical press there).
 pub(super) fn contact_margin(aabb: &parry3d::bounding_volume::Aabb, fraction: Real) -> Real {
     let size = aabb.extents().max_element();
     let reach = aabb.mins.abs().max(aabb.maxs.abs()).max_element();
