@@ -72,10 +72,11 @@ fn summarise(
         1e3 * step_time.as_secs_f64() / steps.max(1) as f64
     );
     println!(
-        "  servo: {:.0} Hz achieved ({} ticks, {} overruns), tick latency p50 {:.1} µs p99 {:.1} µs",
+        "  servo: {:.0} Hz achieved ({} ticks, {} overruns, longest gap {:.2} ms), tick latency p50 {:.1} µs p99 {:.1} µs",
         report.rate_hz(),
         report.ticks,
         report.overruns,
+        1e3 * report.longest_gap(),
         1e6 * report.latency_quantile(0.5),
         1e6 * report.latency_quantile(0.99)
     );

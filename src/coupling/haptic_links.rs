@@ -4,13 +4,10 @@
 
 use super::holding::attached_with_pose;
 use super::surface_set::{CouplingError, SurfaceSet};
-use crate::haptics::{positive_part, PatchVertex, ServoModel, WorldLink};
+use crate::haptics::{positive_part, PatchVertex, ServoModel, WorldLink, MAX_PATCH};
 use crate::math::{Matrix, Pose, Real, Vector};
 use rapier3d::geometry::{ColliderHandle, SharedShape};
 use rapier3d::pipeline::PhysicsWorld;
-
-/// Most patch vertices handed to a servo loop (the nearest are kept).
-const MAX_PATCH: usize = 4096;
 
 /// A first touch is rendered with this share of the touched vertex's spring stiffness (the sum
 /// over its edges, what it resists with while its neighbours have not moved yet): the static

@@ -56,7 +56,7 @@ pub use hand::SimulatedHand;
 pub use link::{haptic_link, DeviceSample, ServoLink, WorldLink};
 pub use recording::{Recording, RecordingError};
 pub use servo::{Servo, ServoReport, ServoThread, ServoTick, TickRecord};
-pub(crate) use servo_model::positive_part;
+pub(crate) use servo_model::{positive_part, MAX_PATCH};
 pub use servo_model::{PatchVertex, ServoModel};
 pub use virtual_coupling::VirtualCoupling;
 

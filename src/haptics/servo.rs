@@ -2,8 +2,9 @@
 //! device, finds the proxy in the world's latest [`super::ServoModel`] and renders the
 //! coupling's force. [`Servo::spawn`] runs it on its own thread at a fixed rate.
 
-use super::{DeviceSample, HapticDevice, HapticsError, ServoLink, VirtualCoupling};
-use crate::math::{Pose, Real, Vector};
+use super::servo_model::{rest_proxy, MAX_PATCH};
+use super::{DeviceSample, HapticDevice, HapticsError, ServoLink, ServoModel, VirtualCoupling};
+use crate::math::{Matrix, Pose, Real, Vector};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -18,6 +19,17 @@ use std::time::{Duration, Instant};
 /// force) sent back to the world, which moves the tool to the proxy at its next step.
 /// The rendered stiffness is the coupling's and the contact's in series, never above the
 /// coupling's: keep it under [`VirtualCoupling::max_passive_stiffness`] for the servo rate.
+///
+/// A new model does not replace the last one at once: at the first tick under a new model,
+/// the difference between the surfaces' force the last tick rendered and the new model's
+/// force at the same proxy becomes an offset, added to the new model's force and faded out
+/// linearly over one world update interval (measured, as a running mean of the ticks between
+/// updates, at most [`Servo::MAX_BLEND`]). A world update is felt as a ramp, not a step, even
+/// when updates come irregularly (the ramp restarts from whatever was rendered). A world that
+/// steps slower than its `dt` in wall time (a 100,000-node surface) hands over forces that
+/// differ by a large share from one update to the next; the ramp keeps them from reaching the
+/// hand as knocks. The price is latency: a model is fully rendered one update interval after
+/// it arrives.
 pub struct Servo<D: HapticDevice> {
     device: D,
     link: ServoLink,
@@ -25,6 +37,18 @@ pub struct Servo<D: HapticDevice> {
     period: Real,
     ticks: u64,
     last: Option<(Vector, Vector)>,
+    /// The latest model read.
+    current: ServoModel,
+    /// The force offset at the first tick under `current` (faded out over `interval`).
+    offset: Vector,
+    /// Ticks since `current` arrived, and the running mean of ticks between arrivals (0: not
+    /// measured yet, no blending).
+    since_update: u32,
+    interval: Real,
+    /// The last tick's proxy and the surfaces' force rendered there.
+    last_surface: Option<(Vector, Vector)>,
+    /// Whether updates are ramped in ([`Servo::set_update_ramp`]).
+    ramp: bool,
 }
 
 impl<D: HapticDevice> std::fmt::Debug for Servo<D> {
@@ -69,6 +93,10 @@ impl<D: HapticDevice> Servo<D> {
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Err(HapticsError::InvalidRate(rate_hz as f64));
         }
+        let model = || ServoModel {
+            patch: Vec::with_capacity(MAX_PATCH),
+            ..ServoModel::default()
+        };
         Ok(Servo {
             device,
             link,
@@ -76,7 +104,74 @@ impl<D: HapticDevice> Servo<D> {
             period: 1.0 / rate_hz,
             ticks: 0,
             last: None,
+            current: model(),
+            offset: Vector::ZERO,
+            since_update: 0,
+            interval: 0.0,
+            last_surface: None,
+            ramp: true,
         })
+    }
+
+    /// Switches the ramp from one model to the next on or off (on by default; see the type's
+    /// docs). Off, each model replaces the last at once: the rendered force is exactly the
+    /// latest model's, with a step at each update.
+    pub fn set_update_ramp(&mut self, on: bool) {
+        self.ramp = on;
+        if !on {
+            self.offset = Vector::ZERO;
+        }
+    }
+
+    /// Whether updates are ramped in.
+    pub fn update_ramp(&self) -> bool {
+        self.ramp
+    }
+
+    /// The longest blend between two models (s): a world that stalls (a refactorization)
+    /// does not slow the next blends beyond this.
+    pub const MAX_BLEND: Real = 0.1;
+
+    /// Reads the link's latest model; a new one becomes `current` and starts a blend.
+    fn read_model(&mut self) {
+        let model = self.link.model();
+        if model.sequence == self.current.sequence {
+            self.since_update = self.since_update.saturating_add(1);
+            return;
+        }
+        if self.current.sequence > 0 {
+            let gap = (self.since_update as Real + 1.0).min(Self::MAX_BLEND / self.period);
+            self.interval = if self.interval > 0.0 {
+                0.8 * self.interval + 0.2 * gap
+            } else {
+                gap
+            };
+        }
+        self.current.copy_from(model);
+        self.since_update = 0;
+        self.offset = match self.last_surface {
+            Some((proxy, rendered)) if self.ramp && self.interval > 1.0 => {
+                let o = rendered - self.current.force_at(proxy);
+                if o.is_finite() {
+                    o
+                } else {
+                    Vector::ZERO
+                }
+            }
+            _ => Vector::ZERO,
+        };
+    }
+
+    /// The surfaces' force and stiffness at `x`: the current model's, plus the fading offset
+    /// (see the type's docs).
+    fn model_at(&self, x: Vector) -> (Vector, Matrix) {
+        let (f, k) = self.current.force_and_stiffness_at(x);
+        let fade = if self.interval > 1.0 {
+            1.0 - (self.since_update as Real / (FADE_SHARE * self.interval)).min(1.0)
+        } else {
+            0.0
+        };
+        (f + self.offset * fade, k)
     }
 
     /// One tick (see the type's docs). Costs the model's contacts, not the mesh: a few
@@ -85,11 +180,11 @@ impl<D: HapticDevice> Servo<D> {
         let state = self.device.state();
         let workspace = self.device.workspace();
         let device = workspace.to_world(&state.pose);
-        let model = self.link.model();
-        let (model_sequence, model_force) = (model.sequence, model.force);
+        self.read_model();
+        let (model_sequence, model_force) = (self.current.sequence, self.current.force);
         let x = device.translation;
         let (proxy, surface_force) = if x.is_finite() {
-            model.proxy(x, self.coupling.stiffness)
+            rest_proxy(x, self.coupling.stiffness, |x| self.model_at(x))
         } else {
             (x, Vector::ZERO)
         };
@@ -105,6 +200,8 @@ impl<D: HapticDevice> Servo<D> {
         self.device.set_force(workspace.force_to_device(force));
         self.device.end_tick();
         self.last = Some((x, proxy)).filter(|(a, b)| a.is_finite() && b.is_finite());
+        self.last_surface =
+            Some((proxy, surface_force)).filter(|(p, f)| p.is_finite() && f.is_finite());
         self.ticks += 1;
         self.link.send(DeviceSample {
             tick: self.ticks,
@@ -149,9 +246,11 @@ impl<D: HapticDevice + 'static> Servo<D> {
     /// Runs the loop on its own thread, one tick per period (sleeping, then spinning the
     /// last 150 µs to the deadline, since a sleep overshoots by tens of microseconds), until
     /// [`ServoThread::stop`]. A loop that fell behind (descheduled by the OS) runs its late
-    /// ticks back to back to keep the rate; more than 20 periods behind, it restarts its
-    /// schedule instead (counted in [`ServoReport::overruns`]). The first `record` ticks are recorded
-    /// for [`ServoReport`] (allocated here, not while running).
+    /// ticks back to back to keep the rate (and a simulated hand's clock in step with the
+    /// wall); more than 50 periods behind, it restarts its schedule instead (counted in
+    /// [`ServoReport::overruns`]); [`ServoReport::longest_gap`] tells how long the device
+    /// went without a force. The first `record` ticks are recorded for [`ServoReport`]
+    /// (allocated here, not while running).
     pub fn spawn(self, record: usize) -> ServoThread<D> {
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
@@ -183,7 +282,7 @@ pub struct ServoReport {
     pub ticks: u64,
     /// Wall time from the first tick to the stop (s).
     pub elapsed: f64,
-    /// Times the loop was more than 20 periods behind and restarted its schedule.
+    /// Times the loop was more than 50 periods behind and restarted its schedule.
     pub overruns: u64,
     /// The first ticks.
     pub records: Vec<TickRecord>,
@@ -207,6 +306,15 @@ impl ServoReport {
     /// The `q`-quantile of the recorded force magnitudes (N).
     pub fn force_quantile(&self, q: f64) -> f64 {
         quantile(self.records.iter().map(|r| r.force.length() as f64), q)
+    }
+
+    /// The longest time between two recorded ticks (s): how long the device once went
+    /// without a new force.
+    pub fn longest_gap(&self) -> f64 {
+        self.records
+            .windows(2)
+            .map(|w| w[1].time - w[0].time)
+            .fold(0.0, f64::max)
     }
 
     /// The largest change of the rendered force between consecutive recorded ticks (N):
@@ -260,12 +368,16 @@ impl<D: HapticDevice> Drop for ServoThread<D> {
     }
 }
 
+/// The share of the update interval over which a new model's offset fades: the ramp ends
+/// before the next update when updates come regularly.
+const FADE_SHARE: Real = 0.75;
+
 /// The last stretch before a deadline is spun, not slept.
 const SPIN: Duration = Duration::from_micros(150);
 
 /// A loop late by up to this many periods catches up (ticks back to back); later than that it
 /// restarts its schedule.
-const CATCH_UP: u32 = 20;
+const CATCH_UP: u32 = 50;
 
 fn run<D: HapticDevice>(
     mut servo: Servo<D>,

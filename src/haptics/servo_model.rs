@@ -90,6 +90,10 @@ impl Default for ServoModel {
     }
 }
 
+/// Most patch vertices the world hands to a servo loop (the nearest are kept); the servo
+/// reserves this much so that it never allocates while running.
+pub(crate) const MAX_PATCH: usize = 4096;
+
 /// Newton iterations of the proxy solve (the force is piecewise linear: a few settle it).
 const PROXY_ITERATIONS: usize = 8;
 
@@ -117,9 +121,18 @@ impl ServoModel {
             return (Vector::ZERO, Matrix::ZERO);
         };
         let pose = Pose::from_parts(x, self.tool_pose.rotation);
+        // Vertices outside the shape's bounding sphere are skipped before the point query.
+        let sphere = shape.compute_local_bounding_sphere();
+        let (centre, r2) = (
+            pose.transform_point(sphere.center),
+            sphere.radius * sphere.radius,
+        );
         // The deepest vertex inside the tool: (depth, direction out, stiffness).
         let mut deepest: Option<(Real, Vector, Real)> = None;
         for v in &self.patch {
+            if (v.position - centre).length_squared() > r2 {
+                continue;
+            }
             let proj = shape.project_point(&pose, v.position, false);
             if !proj.is_inside {
                 continue;
@@ -149,34 +162,59 @@ impl ServoModel {
     /// surfaces (`k (device - proxy) + f(proxy) = 0`), and the surfaces' force there. Newton
     /// steps on the piecewise linear force, from the device's position.
     pub fn proxy(&self, device: Vector, coupling_stiffness: Real) -> (Vector, Vector) {
-        let kc = coupling_stiffness.max(0.0);
-        let mut x = device;
-        let (mut f, mut k) = self.force_and_stiffness_at(x);
-        if f == Vector::ZERO || kc == 0.0 || !device.is_finite() {
-            return (x, f);
-        }
-        let residual = |x: Vector, f: Vector| (device - x) * kc + f;
-        let mut r = residual(x, f);
-        for _ in 0..PROXY_ITERATIONS {
-            // The contact's positive part: a stiffness that falls along the motion (a
-            // deformed surface pushing the tool on) does not steer the steps.
-            let jac = Matrix::from_diagonal(Vector::splat(kc)) + positive_part(&k);
-            let Some(step) = Some(jac.inverse() * r).filter(|s| s.is_finite()) else {
-                break;
-            };
-            let x_new = x + step;
-            let (f_new, k_new) = self.force_and_stiffness_at(x_new);
-            let r_new = residual(x_new, f_new);
-            if r_new.length() >= r.length() {
-                break;
-            }
-            (x, f, k, r) = (x_new, f_new, k_new, r_new);
-            if r.length() <= 1e-6 * (f.length() + kc * 1e-6) {
-                break;
-            }
-        }
-        (x, f)
+        rest_proxy(device, coupling_stiffness, |x| {
+            self.force_and_stiffness_at(x)
+        })
     }
+
+    /// Copies `other` into `self`, reusing `self`'s patch storage (no allocation once the
+    /// patch has room: the servo thread keeps its models this way).
+    pub fn copy_from(&mut self, other: &ServoModel) {
+        self.sequence = other.sequence;
+        self.tool_pose = other.tool_pose;
+        self.force = other.force;
+        self.stiffness = other.stiffness;
+        self.grasping = other.grasping;
+        self.shape.clone_from(&other.shape);
+        self.patch.clear();
+        self.patch.extend_from_slice(&other.patch);
+        self.attached = other.attached;
+    }
+}
+
+/// [`ServoModel::proxy`] for any piecewise linear force `model(x) = (f, -∂f/∂x)`.
+pub(crate) fn rest_proxy(
+    device: Vector,
+    coupling_stiffness: Real,
+    model: impl Fn(Vector) -> (Vector, Matrix),
+) -> (Vector, Vector) {
+    let kc = coupling_stiffness.max(0.0);
+    let mut x = device;
+    let (mut f, mut k) = model(x);
+    if f == Vector::ZERO || kc == 0.0 || !device.is_finite() {
+        return (x, f);
+    }
+    let residual = |x: Vector, f: Vector| (device - x) * kc + f;
+    let mut r = residual(x, f);
+    for _ in 0..PROXY_ITERATIONS {
+        // The contact's positive part: a stiffness that falls along the motion (a
+        // deformed surface pushing the tool on) does not steer the steps.
+        let jac = Matrix::from_diagonal(Vector::splat(kc)) + positive_part(&k);
+        let Some(step) = Some(jac.inverse() * r).filter(|s| s.is_finite()) else {
+            break;
+        };
+        let x_new = x + step;
+        let (f_new, k_new) = model(x_new);
+        let r_new = residual(x_new, f_new);
+        if r_new.length() >= r.length() {
+            break;
+        }
+        (x, f, k, r) = (x_new, f_new, k_new, r_new);
+        if r.length() <= 1e-6 * (f.length() + kc * 1e-6) {
+            break;
+        }
+    }
+    (x, f)
 }
 
 /// The positive semi-definite part of a symmetric matrix (negative eigenvalues dropped).

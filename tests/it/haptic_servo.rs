@@ -4,8 +4,9 @@
 //! model's force at the proxy it sent agrees with the full surface solution the next world
 //! update computes at that proxy; the proxy balances the coupling spring and the model (solved
 //! by hand); a hand pressing a stiff surface over repeated cycles never gets energy back from
-//! the rendering; threads exchanging models while the world steps, refactors and swaps tools
-//! never deadlock, tear a model or panic.
+//! the rendering; a world that steps irregularly and slower than its clock is eased in (no
+//! jump over 5 % of the peak, no energy to the hand); threads exchanging models while the
+//! world steps, refactors and swaps tools never deadlock, tear a model or panic.
 
 use rapier_touch::haptics::{haptic_link, Servo, ServoModel, SimulatedHand, VirtualCoupling};
 use rapier_touch::prelude::*;
@@ -70,6 +71,7 @@ struct Run {
 /// the last proxy it sent with the full solution the world then computed at that proxy.
 fn run_linked(
     scene: (PhysicsWorld, SurfaceSet, ColliderHandle, SurfaceHandle),
+    ramp: bool,
     coupling: VirtualCoupling,
     rate: f32,
     seconds: f32,
@@ -80,6 +82,7 @@ fn run_linked(
     set.connect_haptic(tool, world_end, &mut world).unwrap();
     let hand = SimulatedHand::new(rate, arm).unwrap();
     let mut servo = Servo::new(hand, servo_end, coupling, rate).unwrap();
+    servo.set_update_ramp(ramp);
     let world_dt = world.integration_parameters.dt;
     let ticks_per_step = (rate * world_dt).round() as usize;
     let mut run = Run {
@@ -211,7 +214,16 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
             damping: 0.0,
             max_force: 50.0,
         };
-        let run = run_linked(scene, coupling, 2000.0, 4.0, press_drag_lift(depth, radius));
+        // The model itself, without the ramp that eases each update in (it changes the hand's
+        // path, and so the updates this compares).
+        let run = run_linked(
+            scene,
+            false,
+            coupling,
+            2000.0,
+            4.0,
+            press_drag_lift(depth, radius),
+        );
         assert!(
             run.contacts > 60,
             "{size} m plate: touched in {} updates",
@@ -474,4 +486,103 @@ fn servo_threads_and_a_busy_world_never_block_tear_or_panic() {
         }
     }
     assert!(seen > 10, "only {seen} models of tool a checked");
+}
+
+/// What [`slow_world_run`] saw: the largest rendered-force change between two ticks across a
+/// world update and within one (N), the peak rendered force (N), the rendered work and the
+/// device damping's loss while in contact (J).
+struct SlowRun {
+    across: f32,
+    within: f32,
+    peak: f32,
+    rendered_work: f64,
+    contact_loss: f64,
+}
+
+/// A 5 kHz servo on a world that steps irregularly and slower than its 60 Hz clock: between
+/// two world steps the servo ticks 40 to 200 times (8-40 ms of the hand's time; 24 ms on
+/// average for a 16.7 ms step), as when a large surface's step outlasts its `dt`.
+fn slow_world_run(ramp: bool) -> SlowRun {
+    let rate = 5000.0;
+    let scene = plate_scene(0.3, 24, 400.0, 0.5, 1, SharedShape::ball(0.03));
+    let (mut world, mut set, tool, _) = scene;
+    let (world_end, servo_end) = haptic_link();
+    set.connect_haptic(tool, world_end, &mut world).unwrap();
+    let hand = SimulatedHand::new(rate, press_drag_lift(0.02, 0.03)).unwrap();
+    let coupling = VirtualCoupling {
+        stiffness: 0.5 * VirtualCoupling::max_passive_stiffness(rate, 2.0),
+        damping: 0.0,
+        max_force: 50.0,
+    };
+    let mut servo = Servo::new(hand, servo_end, coupling, rate).unwrap();
+    servo.set_update_ramp(ramp);
+    let mut run = SlowRun {
+        across: 0.0,
+        within: 0.0,
+        peak: 0.0,
+        rendered_work: 0.0,
+        contact_loss: 0.0,
+    };
+    // A fixed linear congruential sequence: the same irregular schedule on every run.
+    let mut state = 12345u32;
+    let (mut ticks, mut last) = (0usize, Vector::ZERO);
+    while ticks < (4.5 * rate) as usize {
+        state = state.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+        let n = 40 + (state >> 16) as usize % 161;
+        for i in 0..n {
+            let loss = servo.device().damping_loss();
+            let f = servo.tick().force;
+            if f != Vector::ZERO {
+                run.contact_loss += servo.device().damping_loss() - loss;
+            }
+            let jump = (f - last).length();
+            if i == 0 {
+                run.across = run.across.max(jump);
+            } else {
+                run.within = run.within.max(jump);
+            }
+            run.peak = run.peak.max(f.length());
+            last = f;
+        }
+        ticks += n;
+        set.step(&mut world);
+    }
+    run.rendered_work = servo.device().rendered_work();
+    run
+}
+
+#[test]
+fn a_slow_irregular_world_is_eased_in_without_knocks_or_energy() {
+    let (eased, stepped) = (slow_world_run(true), slow_world_run(false));
+    for (name, r) in [("ramped", &eased), ("stepped", &stepped)] {
+        println!(
+            "{name}: peak {:.3} N, largest jump across updates {:.4} N ({:.2} %), within {:.4} N, rendered work {:.3e} J, contact damping {:.3e} J",
+            r.peak,
+            r.across,
+            100.0 * r.across / r.peak,
+            r.within,
+            r.rendered_work,
+            r.contact_loss
+        );
+    }
+    assert!(eased.peak > 1.0 && stepped.peak > 1.0, "the press was felt");
+    // The schedule does what a slow world does: without the ramp, updates knock.
+    assert!(
+        stepped.across > 0.05 * stepped.peak,
+        "stepped: {} N across updates",
+        stepped.across
+    );
+    assert!(
+        eased.across <= 0.05 * eased.peak && eased.within <= 0.05 * eased.peak,
+        "ramped: jumps {} N across and {} N within updates against a {} N peak",
+        eased.across,
+        eased.within,
+        eased.peak
+    );
+    assert!(
+        eased.rendered_work <= eased.contact_loss,
+        "ramped: the rendering gave the hand {} J, more than the {} J its damping took",
+        eased.rendered_work,
+        eased.contact_loss
+    );
 }
