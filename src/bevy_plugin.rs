@@ -5,12 +5,14 @@
 //! the same sets (lent as a `PhysicsWorld` through [`crate::hooks::PhysicsSets`], no copy):
 //! - before it ([`TouchSystems::BeforeStep`], after bevy_rapier has created the handles of new
 //!   entities): registers [`TouchTracked`] colliders, attaches [`SoftSurface`]s, registers
-//!   [`SurfaceTool`]s, and records where the bodies and tools start the step;
+//!   [`SurfaceTool`]s and [`HapticTool`]s, records where the bodies and tools start the
+//!   step, and moves each haptic tool to its servo loop's latest proxy;
 //! - during it, the crate's hooks, through bevy_rapier's own hook mechanism:
 //!   `RapierPhysicsPlugin::<TouchPhysicsHooks>`;
 //! - after it ([`TouchSystems::AfterStep`], before bevy_rapier writes the transforms back):
 //!   the step guard, then the surfaces' substeps; each tool's reaction is written into its
-//!   [`SurfaceToolReaction`], each surface into its entity's [`Mesh3d`], if it has one.
+//!   [`SurfaceToolReaction`], each surface into its entity's [`Mesh3d`], if it has one, and
+//!   each haptic tool's model goes to its servo loop ([`crate::haptics`]).
 //!
 //! The plugin uses bevy's headless parts only (the ECS, transforms and `Mesh` assets).
 //!
@@ -96,6 +98,7 @@
 //! ```
 
 use crate::coupling::{AttachOptions, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction};
+use crate::haptics::WorldLink;
 use crate::hooks::{PhysicsSets, TouchPipeline};
 use crate::math::{Pose, Real};
 use crate::surface::MassSpringSurface;
@@ -185,7 +188,26 @@ pub struct SurfaceTool;
 #[derive(Component, Debug, Default, Clone, Copy, PartialEq)]
 pub struct SurfaceToolReaction(pub ToolReaction);
 
-/// Why a [`SurfaceTool`] was refused.
+/// A tool driven by a haptic device through a servo loop on its own thread
+/// ([`crate::haptics::Servo`]): give the entity a `KinematicPositionBased` body and a
+/// collider, and this component with the world end of a [`crate::haptics::haptic_link`].
+/// The plugin connects it ([`SurfaceSet::connect_haptic`]: it becomes a tool of every
+/// surface and gets a [`SurfaceToolReaction`]), moves it to the servo's proxy before each
+/// step (its `Transform` is then written back by bevy_rapier; do not set it yourself) and
+/// publishes its model after each step. A refused link gets a [`SurfaceToolRefused`].
+#[derive(Component, Debug)]
+pub struct HapticTool {
+    link: Option<WorldLink>,
+}
+
+impl HapticTool {
+    /// A tool to connect to the servo loop holding the other end of `link`.
+    pub fn new(link: WorldLink) -> Self {
+        Self { link: Some(link) }
+    }
+}
+
+/// Why a [`SurfaceTool`] or a [`HapticTool`] was refused.
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct SurfaceToolRefused(pub CouplingError);
 
@@ -377,6 +399,7 @@ fn register(
     mut untracked: RemovedComponents<TouchTracked>,
     mut surfaces: Query<(Entity, &mut SoftSurface, &RapierRigidBodyHandle)>,
     tools: NewTools,
+    mut haptic: Query<(Entity, &RapierColliderHandle, &mut HapticTool)>,
 ) {
     let touch = &mut *touch;
     let dt = match *mode {
@@ -408,7 +431,11 @@ fn register(
         .map(|(e, _, _)| e)
         .collect();
     let new_tools: Vec<(Entity, ColliderHandle)> = tools.iter().map(|(e, h)| (e, h.0)).collect();
-    if pending.is_empty() && new_tools.is_empty() {
+    let mut links: Vec<(Entity, ColliderHandle, WorldLink)> = haptic
+        .iter_mut()
+        .filter_map(|(e, h, mut t)| t.link.take().map(|l| (e, h.0, l)))
+        .collect();
+    if pending.is_empty() && new_tools.is_empty() && links.is_empty() {
         return;
     }
     with_context(&mut context, |world| {
@@ -439,6 +466,17 @@ fn register(
                 }
             }
         }
+        for (e, h, link) in links.drain(..) {
+            match touch.surfaces.connect_haptic(h, link, world) {
+                Ok(()) => {
+                    commands.entity(e).insert(SurfaceToolReaction::default());
+                }
+                Err(err) => {
+                    log::warn!("rapier_touch: haptic tool {e} refused: {err}");
+                    commands.entity(e).insert(SurfaceToolRefused(err));
+                }
+            }
+        }
         for (e, h) in new_tools {
             match touch.surfaces.add_tool(h, world) {
                 Ok(()) => {
@@ -453,9 +491,9 @@ fn register(
     });
 }
 
-/// The start-of-step records: body and tool poses.
+/// The start-of-step records (body and tool poses), then the haptic tools to their proxies.
 fn before_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
-    let Ok((_, colliders, _, mut bodies, _)) = context.single_mut() else {
+    let Ok((_, mut colliders, _, mut bodies, _)) = context.single_mut() else {
         return;
     };
     let touch = &mut *touch;
@@ -465,6 +503,9 @@ fn before_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
             .begin_step(&mut bodies.bodies, &colliders.colliders),
     );
     touch.surfaces.begin_step(&colliders.colliders);
+    touch
+        .surfaces
+        .drive_haptic_tools(&mut bodies.bodies, &mut colliders.colliders);
 }
 
 /// The step guard, then the surfaces.
@@ -476,6 +517,7 @@ fn after_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
     with_context(&mut context, |world| {
         touch.pipeline.end_step(world, prev);
         touch.surfaces.step_surfaces(world);
+        touch.surfaces.publish_haptic_models(world);
     });
 }
 

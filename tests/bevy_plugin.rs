@@ -1,7 +1,8 @@
 //! The bevy plugin, headless: `MinimalPlugins`, bevy_rapier's plugin with the crate's hooks,
 //! and the crate's plugin, run through bevy's schedule (`cargo test --features bevy --test
 //! bevy_plugin`). Checked against physics, not against the crate: where a fast box ends
-//! (and where it ends without the plugin), and a static solve of the plate's springs.
+//! (and where it ends without the plugin), and a static solve of the plate's springs (for a
+//! tool pressed by hand and for one driven by a simulated hand through a servo loop).
 
 use bevy::asset::Assets;
 use bevy::mesh::{Mesh, Mesh3d, VertexAttributeValues};
@@ -271,4 +272,103 @@ fn despawning_tools_and_surfaces_mid_press_is_safe() {
     }
     let r = app.world().get::<SurfaceToolReaction>(second).unwrap().0;
     assert_eq!(r.force, Vec3::ZERO);
+}
+
+#[test]
+fn a_haptic_tool_follows_its_servo_and_the_hand_feels_the_plate() {
+    use rapier_touch::haptics::{haptic_link, Servo, SimulatedHand, VirtualCoupling};
+    use rapier_touch::math::{Pose, Vector};
+
+    let mut app = app(true);
+    let (cells, k, r) = (10, 100.0, 0.02);
+    let soft = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, cells, cells))
+        .stiffness(k)
+        .damping(0.2)
+        .mass(MassDistribution::Total(0.1))
+        .pinned(plate_rim(cells, cells))
+        .build()
+        .unwrap();
+    let triangles = soft.triangles().to_vec();
+    let n = soft.num_vertices();
+    let centre = (cells / 2 * (cells + 1) + cells / 2) as usize;
+    let options = AttachOptions {
+        substeps: 8,
+        collider: true,
+    };
+    app.world_mut().spawn((
+        RigidBody::Fixed,
+        Transform::default(),
+        SoftSurface::new(soft, options),
+    ));
+    // A kinematic ball driven by a simulated hand at 5 kHz, served on this thread between
+    // frames; the hand's arm lowers its target from 10 cm above the plate to the plate's
+    // plane over a second and holds it there: the plate pushes back, the hand rests
+    // between its arm and the rendered force.
+    let (world_end, servo_end) = haptic_link();
+    let ball = app
+        .world_mut()
+        .spawn((
+            RigidBody::KinematicPositionBased,
+            Collider::ball(r),
+            HapticTool::new(world_end),
+            Transform::from_xyz(0.0, 0.1, 0.0),
+        ))
+        .id();
+    let rate = 5000.0;
+    let hand = SimulatedHand::new(rate, |t| {
+        Pose::from_translation(Vector::new(0.0, 0.1 * (1.0 - t.min(1.0)), 0.0))
+    })
+    .unwrap();
+    let coupling = VirtualCoupling {
+        stiffness: 0.5 * VirtualCoupling::max_passive_stiffness(rate, 2.0),
+        damping: 0.0,
+        max_force: 20.0,
+    };
+    let mut servo = Servo::new(hand, servo_end, coupling, rate).unwrap();
+    let mut last = None;
+    for frame in 0..240 {
+        for _ in 0..83 + (frame % 3 == 0) as usize {
+            last = Some(servo.tick());
+        }
+        app.update();
+    }
+    let tick = last.unwrap();
+
+    // The tool stands where the servo's proxy was sent, and presses the plate.
+    let tool = app.world().get::<Transform>(ball).unwrap().translation;
+    assert!(
+        (tool - tick.proxy).length() < 1e-3,
+        "tool at {tool}, proxy at {}",
+        tick.proxy
+    );
+    let reaction = app.world().get::<SurfaceToolReaction>(ball).unwrap().0;
+    assert_eq!(reaction.held_vertices, 1);
+    let depth = r - tool.y;
+    assert!(depth > 5e-3, "the tool is {depth} m into the plate");
+    // The plate's reaction is the static solve's at the tool's depth; the hand feels it.
+    let expected = static_force(
+        &triangles,
+        n,
+        &plate_rim(cells, cells),
+        centre,
+        depth as f64,
+        k as f64,
+    );
+    let got = reaction.force.y as f64;
+    assert!(
+        (got - expected).abs() <= 0.05 * expected,
+        "force {got} N against the static {expected} N"
+    );
+    let rendered = tick.force.y as f64;
+    assert!(
+        (rendered - got).abs() <= 0.05 * got,
+        "rendered {rendered} N, the plate's {got} N"
+    );
+    // At rest the hand balances its arm: 300 N/m from the plate's plane down to it.
+    let hand = servo.device();
+    let arm = hand.arm_stiffness * tick.device.translation.y;
+    assert!(
+        (arm as f64 - rendered).abs() <= 0.05 * rendered,
+        "arm {arm} N, rendered {rendered} N"
+    );
 }

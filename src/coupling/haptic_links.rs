@@ -6,7 +6,8 @@ use super::holding::attached_with_pose;
 use super::surface_set::{CouplingError, SurfaceSet};
 use crate::haptics::{positive_part, PatchVertex, ServoModel, WorldLink, MAX_PATCH};
 use crate::math::{Matrix, Pose, Real, Vector};
-use rapier3d::geometry::{ColliderHandle, SharedShape};
+use rapier3d::dynamics::RigidBodySet;
+use rapier3d::geometry::{ColliderHandle, ColliderSet, SharedShape};
 use rapier3d::pipeline::PhysicsWorld;
 
 /// A first touch is rendered with this share of the touched vertex's spring stiffness (the sum
@@ -91,19 +92,23 @@ impl SurfaceSet {
 
     /// Moves each linked tool to its servo loop's latest proxy (after the start poses are
     /// recorded, so the surfaces sweep the motion).
-    pub(crate) fn drive_haptic_tools(&mut self, world: &mut PhysicsWorld) {
-        self.links.retain(|h, _| world.colliders.contains(*h));
+    pub(crate) fn drive_haptic_tools(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+    ) {
+        self.links.retain(|h, _| colliders.contains(*h));
         for (h, state) in self.links.iter_mut() {
             let sample = state.link.device();
             if sample.tick == 0 || !sample.proxy.is_finite() {
                 continue;
             }
-            let Some(c) = world.colliders.get_mut(*h) else {
+            let Some(c) = colliders.get_mut(*h) else {
                 continue;
             };
             match c.parent() {
                 Some(b) => {
-                    if let Some(body) = world.bodies.get_mut(b) {
+                    if let Some(body) = bodies.get_mut(b) {
                         if body.is_kinematic() {
                             let to_body = c.position_wrt_parent().copied();
                             let pose = to_body.map_or(sample.proxy, |p| sample.proxy * p.inverse());

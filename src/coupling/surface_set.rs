@@ -766,7 +766,7 @@ impl SurfaceSet {
         rigid_step: impl FnOnce(&mut PhysicsWorld),
     ) {
         self.begin_step(&world.colliders);
-        self.drive_haptic_tools(world);
+        self.drive_haptic_tools(&mut world.bodies, &mut world.colliders);
         rigid_step(world);
         self.step_surfaces(world);
         self.publish_haptic_models(world);

@@ -17,26 +17,25 @@
 //!   under [`VirtualCoupling::max_passive_stiffness`]) and sends the proxy back; the world
 //!   moves the tool there. [`Servo::spawn`] runs it on its own thread.
 //!
-//! No pipeline is needed here; the world side lives in [`crate::coupling`].
+//! No pipeline is needed here; the world side lives in [`crate::coupling`]. In bevy (the
+//! `bevy` feature), give the tool's entity a `bevy_plugin::HapticTool` holding the world end:
+//! the plugin connects it, moves it to the proxy and publishes its models around each step.
 //!
 //! # Limits
 //! - Translation only: the model renders the force on the tool, not a torque (a 3-DoF
 //!   device); a 6-DoF device's rotation is passed to the tool but gets no torque back.
-//! - The world must hold its own rate in wall time. The model is a linearisation around the
-//!   last full solution, so it is only as good as the update is recent: with the world at
-//!   60 Hz the rendered force stays within 5 % of each full update and jumps by under 4 % of
-//!   its peak across updates (788-node organ, `examples/haptic_thread.rs`). A world whose step
-//!   takes longer than its `dt` (a 100,000-node surface under the exact filter steps in about
-//!   35 ms on a 2-core machine) lags the hand: the servo keeps its rate, but the tool reaches
-//!   the proxy late and the rendered force jumps at each update (by most of its peak on the
-//!   100,000-node sphere). Stepping it with a `dt` it can hold (1/15 s) does not cure it yet:
-//!   at that step the coupled contact itself bounces and the loop limit-cycles. Until this is
-//!   solved, give the servo a surface whose step fits in its `dt`.
+//! - The model is a linearisation around the last full solution, so it is only as good as
+//!   the update is recent. The servo eases each update in ([`Servo::set_update_ramp`]): a
+//!   world that steps slower than its `dt` in wall time (a 100,000-node surface under the
+//!   exact filter steps in 21-25 ms on a 2-core machine, for a 1/60 s `dt`) is felt without
+//!   knocks (largest jump 1.9 % of the peak on the 99,848-node sphere,
+//!   `examples/haptic_thread.rs`), but its contact lags the hand: the world's simulated time
+//!   runs slower than the wall, and a model is fully rendered one update interval after it
+//!   arrives. A larger world `dt` is the other way to keep up with the wall clock; it was
+//!   not re-measured with the ramp (before it, at 1/30 s the coupled contact bounced).
 //! - Between updates, a contact that starts is rendered from one surface vertex (the deepest
 //!   the tool covers, with its own stiffness), not from the surface's coupled response: the
 //!   first update after a touch corrects it.
-//! - The bevy plugin does not drive haptic links yet: call
-//!   [`crate::coupling::SurfaceSet::connect_haptic`] on a `SurfaceSet` stepped by hand.
 //!
 //! # Wiring a real device
 //! Implement [`HapticDevice`] over the device's SDK (CHAI3D, OpenHaptics, libnifalcon...):
