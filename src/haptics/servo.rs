@@ -30,6 +30,15 @@ use std::time::{Duration, Instant};
 /// differ by a large share from one update to the next; the ramp keeps them from reaching the
 /// hand as knocks. The price is latency: a model is fully rendered one update interval after
 /// it arrives.
+///
+/// The ramp is held to an energy budget. A world's force is not always elastic: a damped
+/// surface struck fast pushes back hardest while the tool moves in, and the world reports
+/// that a step late. Eased in, such a force kept pushing a hand that had turned back, and a
+/// hand pressing on bounced for good (the 100,000-node plate of the servo bench). So the loop
+/// books the work of its rendered force on the device (held over a tick, it does the force
+/// times the device's displacement); the energy the hand put in since the contact began is
+/// the budget, and an offset whose work on the proxy exceeds it fades out within a few ticks
+/// (to 1 % in 20).
 pub struct Servo<D: HapticDevice> {
     device: D,
     link: ServoLink,
@@ -49,6 +58,12 @@ pub struct Servo<D: HapticDevice> {
     last_surface: Option<(Vector, Vector)>,
     /// Whether updates are ramped in ([`Servo::set_update_ramp`]).
     ramp: bool,
+    /// The energy the hand has put into the loop (J: the work of the rendered force on the
+    /// device, negated), the force the last tick rendered, and the work the current
+    /// offset has done on the proxy (J).
+    reserve: f64,
+    last_force: Vector,
+    offset_work: f64,
 }
 
 impl<D: HapticDevice> std::fmt::Debug for Servo<D> {
@@ -110,6 +125,9 @@ impl<D: HapticDevice> Servo<D> {
             interval: 0.0,
             last_surface: None,
             ramp: true,
+            reserve: 0.0,
+            last_force: Vector::ZERO,
+            offset_work: 0.0,
         })
     }
 
@@ -149,6 +167,7 @@ impl<D: HapticDevice> Servo<D> {
         }
         self.current.copy_from(model);
         self.since_update = 0;
+        self.offset_work = 0.0;
         self.offset = match self.last_surface {
             Some((proxy, rendered)) if self.ramp && self.interval > 1.0 => {
                 let o = rendered - self.current.force_at(proxy);
@@ -166,12 +185,16 @@ impl<D: HapticDevice> Servo<D> {
     /// (see the type's docs).
     fn model_at(&self, x: Vector) -> (Vector, Matrix) {
         let (f, k) = self.current.force_and_stiffness_at(x);
-        let fade = if self.interval > 1.0 {
+        (f + self.offset * self.fade(), k)
+    }
+
+    /// The share of the offset still applied.
+    fn fade(&self) -> Real {
+        if self.interval > 1.0 {
             1.0 - (self.since_update as Real / (FADE_SHARE * self.interval)).min(1.0)
         } else {
             0.0
-        };
-        (f + self.offset * fade, k)
+        }
     }
 
     /// One tick (see the type's docs). Costs the model's contacts, not the mesh: a few
@@ -183,11 +206,24 @@ impl<D: HapticDevice> Servo<D> {
         self.read_model();
         let (model_sequence, model_force) = (self.current.sequence, self.current.force);
         let x = device.translation;
-        let (proxy, surface_force) = if x.is_finite() {
+        let (mut proxy, mut surface_force) = if x.is_finite() {
             rest_proxy(x, self.coupling.stiffness, |x| self.model_at(x))
         } else {
             (x, Vector::ZERO)
         };
+        if let Some((_, p)) = self.last {
+            // The ramp's energy budget: the offset may push the proxy along with no more
+            // work than the hand has put in; past that, it fades out within a few ticks.
+            let offset = self.offset * self.fade();
+            if offset != Vector::ZERO {
+                self.offset_work += offset.dot(proxy - p) as f64;
+                if self.offset_work > self.reserve.max(0.0) || !self.offset_work.is_finite() {
+                    self.offset *= OVER_BUDGET_DECAY;
+                    (proxy, surface_force) =
+                        rest_proxy(x, self.coupling.stiffness, |x| self.model_at(x));
+                }
+            }
+        }
         let (dv, pv) = match self.last {
             Some((d, p)) => ((x - d) / self.period, (proxy - p) / self.period),
             None => (Vector::ZERO, Vector::ZERO),
@@ -197,6 +233,16 @@ impl<D: HapticDevice> Servo<D> {
         } else {
             Vector::ZERO
         };
+        if let Some((d, _)) = self.last {
+            // The work the last tick's force, held over the tick, did on the device.
+            self.reserve -= self.last_force.dot(x - d) as f64;
+        }
+        if surface_force == Vector::ZERO || !self.reserve.is_finite() {
+            // Out of contact the surfaces hold nothing for the hand.
+            self.reserve = 0.0;
+            self.offset_work = 0.0;
+        }
+        self.last_force = force;
         self.device.set_force(workspace.force_to_device(force));
         self.device.end_tick();
         self.last = Some((x, proxy)).filter(|(a, b)| a.is_finite() && b.is_finite());
@@ -371,6 +417,10 @@ impl<D: HapticDevice> Drop for ServoThread<D> {
 /// The share of the update interval over which a new model's offset fades: the ramp ends
 /// before the next update when updates come regularly.
 const FADE_SHARE: Real = 0.75;
+
+/// Past its energy budget, the ramp's offset shrinks by this factor per tick (to 1 % in 90
+/// ticks, 18 ms at 5 kHz): a step would knock the hand.
+const OVER_BUDGET_DECAY: Real = 0.95;
 
 /// The last stretch before a deadline is spun, not slept.
 const SPIN: Duration = Duration::from_micros(150);

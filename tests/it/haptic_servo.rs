@@ -12,6 +12,7 @@ use rapier_touch::haptics::{haptic_link, Servo, ServoModel, SimulatedHand, Virtu
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::math::Matrix;
 use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::scenes::HapticScene;
 use rapier_touch::surface::meshing::{plate, plate_rim};
 use std::time::{Duration, Instant};
 
@@ -584,5 +585,60 @@ fn a_slow_irregular_world_is_eased_in_without_knocks_or_energy() {
         "ramped: the rendering gave the hand {} J, more than the {} J its damping took",
         eased.rendered_work,
         eased.contact_loss
+    );
+}
+
+#[test]
+fn a_hand_striking_a_fine_damped_plate_comes_to_rest_on_it() {
+    // The 100,000-node plate of the servo bench (edges of 100 N/m with 1 N·s/m dampers, on
+    // a 0.95 mm mesh): a tool that arrives fast is met by the dampers of every edge around
+    // it, tens of newtons that vanish once it stops. The world reports them a step late;
+    // eased in by the ramp they pushed the hand out with more energy than it brought, and
+    // a hand pressing on bounced for good (a limit cycle, 1.5 cm each way).
+    let mut scene = HapticScene::plate(315, 1);
+    let link = scene.link(0);
+    let target = scene.script(0)(1.8);
+    let rate = 5000.0;
+    let hand = SimulatedHand::new(rate, move |_| target).unwrap();
+    let arm = hand.arm_stiffness;
+    let coupling = VirtualCoupling {
+        stiffness: 0.5 * VirtualCoupling::max_passive_stiffness(rate, hand.device_damping),
+        damping: 0.0,
+        max_force: 20.0,
+    };
+    let mut servo = Servo::new(hand, link, coupling, rate).unwrap();
+    let mut heights = Vec::new();
+    let mut last = None;
+    for _ in 0..90 {
+        for _ in 0..83 {
+            last = Some(servo.tick());
+        }
+        scene.set.step(&mut scene.world);
+        heights.push(
+            scene.world.colliders[scene.tools[0]]
+                .position()
+                .translation
+                .y,
+        );
+    }
+    let tick = last.unwrap();
+    let reaction = scene.set.tool_reaction(scene.tools[0]).unwrap().force;
+    // At rest over the last half second: the tool still, pressing the plate.
+    let settled = &heights[60..];
+    let spread = settled.iter().cloned().fold(f32::MIN, f32::max)
+        - settled.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(spread < 1e-4, "the tool still moves {spread} m");
+    assert!(reaction.y > 0.5, "reaction {reaction:?}");
+    // The hand feels the plate's force and rests where its arm balances it.
+    let rendered = tick.force.y;
+    assert!(
+        (rendered - reaction.y).abs() < 0.02 * reaction.y,
+        "rendered {rendered} N, the plate's {} N",
+        reaction.y
+    );
+    let held = arm * (tick.device.translation.y - target.translation.y);
+    assert!(
+        (held - rendered).abs() < 0.02 * rendered,
+        "arm {held} N, rendered {rendered} N"
     );
 }
