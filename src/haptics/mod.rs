@@ -27,8 +27,8 @@
 //! - The model is a linearisation around the last full solution, so it is only as good as
 //!   the update is recent. The servo eases each update in ([`Servo::set_update_ramp`]): a
 //!   world that steps slower than its `dt` in wall time (a 100,000-node surface under the
-//!   exact filter steps in 21-25 ms on a 2-core machine, for a 1/60 s `dt`) is felt without
-//!   knocks (largest jump 3.3-5.1 % of the peak on the 99,848-node sphere,
+//!   exact filter steps in 24-27 ms on a 2-core machine, for a 1/60 s `dt`) is felt without
+//!   knocks (largest jump 1.5-3.0 % of the peak on the 99,848-node sphere,
 //!   `examples/haptic_thread.rs`), but its contact lags the hand: the world's simulated time
 //!   runs slower than the wall, and a model is fully rendered one update interval after it
 //!   arrives. A larger world `dt` is the other way to keep up with the wall clock; it was

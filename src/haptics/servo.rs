@@ -37,8 +37,9 @@ use std::time::{Duration, Instant};
 /// hand pressing on bounced for good (the 100,000-node plate of the servo bench). So the loop
 /// books the work of its rendered force on the device (held over a tick, it does the force
 /// times the device's displacement); the energy the hand put in since the contact began is
-/// the budget, and an offset whose work on the proxy exceeds it fades out within a few ticks
-/// (to 1 % in 20).
+/// the budget, and an offset whose work pushing the proxy out of the surfaces exceeds it
+/// fades out faster (to 1 % in 90 ticks). Pressing in, the hand does the work: an offset
+/// that eases a press in is not booked.
 pub struct Servo<D: HapticDevice> {
     device: D,
     link: ServoLink,
@@ -212,11 +213,14 @@ impl<D: HapticDevice> Servo<D> {
             (x, Vector::ZERO)
         };
         if let Some((_, p)) = self.last {
-            // The ramp's energy budget: the offset may push the proxy along with no more
-            // work than the hand has put in; past that, it fades out within a few ticks.
+            // The ramp's energy budget: the offset may push the proxy out of the surfaces
+            // with no more work than the hand has put in; past that, it fades out faster.
+            // Only the push out is booked: pressing in, the hand does the work, and an
+            // offset that eases the press in is paid back from the reserve on the way out.
             let offset = self.offset * self.fade();
-            if offset != Vector::ZERO {
-                self.offset_work += offset.dot(proxy - p) as f64;
+            let step = proxy - p;
+            if offset != Vector::ZERO && step.dot(surface_force) > 0.0 {
+                self.offset_work += offset.dot(step).max(0.0) as f64;
                 if self.offset_work > self.reserve.max(0.0) || !self.offset_work.is_finite() {
                     self.offset *= OVER_BUDGET_DECAY;
                     (proxy, surface_force) =
