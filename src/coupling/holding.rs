@@ -7,6 +7,7 @@ use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{find_contacts, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::{contact_margin, ToolShape};
+use crate::geometry::SurfaceSnapshot;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -129,11 +130,19 @@ pub(super) fn surface_substep(
     if tools.iter().any(|t| !t.shape.parts.is_empty()) {
         s.surface.positions_into(&mut s.scratch);
         s.contacts.clear();
+        // Every triangle's bounds over the substep, once for all the tools.
+        SurfaceSnapshot {
+            before: &s.before,
+            now: &s.scratch,
+            triangles: s.surface.triangles(),
+        }
+        .triangle_bounds(&mut s.triangle_bounds);
         let (mut velocities, mut owners) = (Vec::new(), Vec::new());
         for t in tools {
             for (local, mesh) in &t.shape.parts {
                 find_contacts(
                     s.surface.triangles(),
+                    &s.triangle_bounds,
                     mesh,
                     &(inv * t.start * *local),
                     &(inv * t.end * *local),

@@ -7,7 +7,9 @@
 //! velocity change and the next surface step's constraint impulse.
 
 use super::tool_shape::contact_margin;
-use crate::geometry::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot, TouchMesh};
+use crate::geometry::{
+    tool_surface_contacts, triangles_in, SurfaceContact, SurfaceSnapshot, TouchMesh,
+};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, PointPress};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -59,11 +61,13 @@ pub(super) fn reaction_of(
 }
 
 /// Finds the contacts of `mesh` (moving from `start` to `end`, surface frame) with the surface
-/// (`before`: positions at the start of the substep, `now`: at its end) and appends them to
-/// `contacts`, with the tool's velocity along each contact's normal in `velocities`.
+/// (`before`: positions at the start of the substep, `now`: at its end; `bounds`: its
+/// triangles' bounds over the substep, [`SurfaceSnapshot::triangle_bounds`]) and appends them
+/// to `contacts`, with the tool's velocity along each contact's normal in `velocities`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn find_contacts(
     triangles: &[[u32; 3]],
+    bounds: &[Aabb],
     mesh: &TouchMesh,
     start: &Pose,
     end: &Pose,
@@ -82,7 +86,7 @@ pub(super) fn find_contacts(
         now,
         triangles,
     };
-    snapshot.triangles_near(&swept.loosened(2.0 * margin), candidates);
+    triangles_in(bounds, &swept.loosened(2.0 * margin), candidates);
     if candidates.is_empty() {
         return;
     }

@@ -9,6 +9,7 @@ use super::tool_shape::ToolShape;
 use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
+use parry3d::bounding_volume::Aabb;
 use parry3d::shape::{SharedShape, TriMeshFlags};
 use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderBuilder, ColliderHandle, ColliderSet, Group, InteractionGroups};
@@ -150,6 +151,8 @@ pub struct AttachedSurface {
     pub(super) pressed: Vec<Pressed>,
     pub(super) last_pressed: Vec<Pressed>,
     pub(super) candidates: Vec<u32>,
+    /// Every triangle's bounds over the substep (sharp tools' candidates).
+    pub(super) triangle_bounds: Vec<Aabb>,
     pub(super) contacts: Vec<SurfaceContact>,
     /// Vertices stuck to a tool (friction).
     pub(super) sticks: Sticks,
@@ -385,6 +388,7 @@ impl SurfaceSet {
             pressed: Vec::new(),
             last_pressed: Vec::new(),
             candidates: Vec::new(),
+            triangle_bounds: Vec::new(),
             sticks: Sticks::default(),
             pair_friction: HashMap::default(),
             contacts: Vec::new(),

@@ -24,5 +24,5 @@ pub use contact::{
 };
 pub use motion::RigidMotion;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
-pub use surface_contact::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot};
+pub use surface_contact::{tool_surface_contacts, triangles_in, SurfaceContact, SurfaceSnapshot};
 pub use touch_mesh::{safe_step_length, Feature, TouchMesh, TouchMeshError};

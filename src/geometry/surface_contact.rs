@@ -84,10 +84,19 @@ impl SurfaceSnapshot<'_> {
     }
 
     /// The triangles whose bounds over the substep (start and end) meet `aabb`: the candidates
-    /// for [`tool_surface_contacts`]. A linear scan (a BVH refit per substep costs as much).
+    /// for [`tool_surface_contacts`]. A linear scan (a BVH refit per substep costs as much);
+    /// with several tools, [`Self::triangle_bounds`] once and [`triangles_in`] per tool.
     pub fn triangles_near(&self, aabb: &Aabb, out: &mut Vec<u32>) {
+        let mut bounds = Vec::new();
+        self.triangle_bounds(&mut bounds);
+        triangles_in(&bounds, aabb, out);
+    }
+
+    /// Each triangle's bounds over the substep (its vertices at the start and at the end), in
+    /// `out` (cleared first).
+    pub fn triangle_bounds(&self, out: &mut Vec<Aabb>) {
         out.clear();
-        for (t, idx) in self.triangles.iter().enumerate() {
+        out.extend(self.triangles.iter().map(|idx| {
             let mut lo = Vector::splat(Real::MAX);
             let mut hi = Vector::splat(Real::MIN);
             for &v in idx {
@@ -98,9 +107,18 @@ impl SurfaceSnapshot<'_> {
                     }
                 }
             }
-            if lo.cmple(aabb.maxs).all() && hi.cmpge(aabb.mins).all() {
-                out.push(t as u32);
-            }
+            Aabb::new(lo, hi)
+        }));
+    }
+}
+
+/// The triangles whose `bounds` ([`SurfaceSnapshot::triangle_bounds`]) meet `aabb`, in `out`
+/// (cleared first).
+pub fn triangles_in(bounds: &[Aabb], aabb: &Aabb, out: &mut Vec<u32>) {
+    out.clear();
+    for (t, b) in bounds.iter().enumerate() {
+        if b.mins.cmple(aabb.maxs).all() && b.maxs.cmpge(aabb.mins).all() {
+            out.push(t as u32);
         }
     }
 }
@@ -262,8 +280,20 @@ pub fn tool_surface_contacts(
         }
         out.extend(best.map(|(_, c)| c));
     }
-    // Tool edge across a surface edge.
+    // Tool edge across a surface edge. Each surface edge once, with the first candidate
+    // triangle that has it (its normal and motion).
     let mut seen = parry3d::utils::hashset::HashSet::default();
+    let mut surface_edges = Vec::with_capacity(tris.len() * 2);
+    for (t, now, n, moved) in &tris {
+        let idx = surface.triangles[*t as usize];
+        for k in 0..3 {
+            let (i, j) = (idx[k], idx[(k + 1) % 3]);
+            if seen.insert((i.min(j), i.max(j))) {
+                let (q0, q1) = (now[k], now[(k + 1) % 3]);
+                surface_edges.push((i, j, q0, q1, q0.min(q1), q0.max(q1), *n, *moved));
+            }
+        }
+    }
     for (e, &[a, b]) in tool.edges().iter().enumerate() {
         let [ta, tb] = tool.edge_triangles(e as u32);
         if tool.triangle_normal(ta).dot(tool.triangle_normal(tb)) > 1.0 - 1e-6 {
@@ -272,54 +302,54 @@ pub fn tool_surface_contacts(
         let feature = Feature::Edge([a.min(b), a.max(b)]);
         let (p0, p1) = (tool_end[a as usize], tool_end[b as usize]);
         let (s0, s1) = (tool_start[a as usize], tool_start[b as usize]);
-        seen.clear();
         let travel = (p0 - s0).length().max((p1 - s1).length()) + margin;
-        for (t, now, n, moved) in &tris {
-            let idx = surface.triangles[*t as usize];
-            for k in 0..3 {
-                let (i, j) = (idx[k], idx[(k + 1) % 3]);
-                if !seen.insert((i.min(j), i.max(j))) {
-                    continue;
-                }
-                let (q0, q1) = (now[k], now[(k + 1) % 3]);
-                // Nearly parallel edges cross at no definite point: the tool's vertices and the
-                // surface's own vertices carry such a contact.
-                let (e_dir, f_dir) = (p1 - p0, q1 - q0);
-                if e_dir.cross(f_dir).length() < MIN_EDGE_SINE * e_dir.length() * f_dir.length() {
-                    continue;
-                }
-                // Frictionless: a force along the tool's edge has no contact to act on.
-                let Some(e_unit) = e_dir.try_normalize() else {
-                    continue;
-                };
-                // Along the triangle's normal less its part along the tool's edge.
-                let Some(u) = (-(*n - e_unit * e_unit.dot(*n)))
-                    .try_normalize()
-                    .filter(|u| -u.dot(*n) >= MIN_EDGE_NORMAL_COS)
-                else {
-                    continue;
-                };
-                // Walking the tool edge back along -u by `depth` makes the edges cross.
-                let Some((depth, alpha, beta, _)) =
-                    edge_edge(p0, p1, q0, q1, u, -(travel + moved), travel + moved)
-                else {
-                    continue;
-                };
-                const INTERIOR: f64 = 1e-6;
-                if !(INTERIOR..=1.0 - INTERIOR).contains(&alpha)
-                    || !(INTERIOR..=1.0 - INTERIOR).contains(&beta)
-                {
-                    continue;
-                }
-                out.push(SurfaceContact {
-                    tool_feature: feature,
-                    surface: [(i, (1.0 - beta) as Real), (j, beta as Real), (0, 0.0)],
-                    count: 2,
-                    normal: u.as_vec3(),
-                    depth: depth as Real,
-                    point: (p0 + (p1 - p0) * alpha).as_vec3(),
-                });
+        let (lo, hi) = (p0.min(p1), p0.max(p1));
+        for &(i, j, q0, q1, q_lo, q_hi, n, moved) in &surface_edges {
+            // The walk below moves the tool edge at most `travel + moved`: a surface edge
+            // farther from its box in any axis cannot cross it.
+            let reach = DVec3::splat(travel + moved);
+            if (q_lo - (hi + reach)).max_element() > 0.0
+                || ((lo - reach) - q_hi).max_element() > 0.0
+            {
+                continue;
             }
+            // Nearly parallel edges cross at no definite point: the tool's vertices and the
+            // surface's own vertices carry such a contact.
+            let (e_dir, f_dir) = (p1 - p0, q1 - q0);
+            if e_dir.cross(f_dir).length() < MIN_EDGE_SINE * e_dir.length() * f_dir.length() {
+                continue;
+            }
+            // Frictionless: a force along the tool's edge has no contact to act on.
+            let Some(e_unit) = e_dir.try_normalize() else {
+                continue;
+            };
+            // Along the triangle's normal less its part along the tool's edge.
+            let Some(u) = (-(n - e_unit * e_unit.dot(n)))
+                .try_normalize()
+                .filter(|u| -u.dot(n) >= MIN_EDGE_NORMAL_COS)
+            else {
+                continue;
+            };
+            // Walking the tool edge back along -u by `depth` makes the edges cross.
+            let Some((depth, alpha, beta, _)) =
+                edge_edge(p0, p1, q0, q1, u, -(travel + moved), travel + moved)
+            else {
+                continue;
+            };
+            const INTERIOR: f64 = 1e-6;
+            if !(INTERIOR..=1.0 - INTERIOR).contains(&alpha)
+                || !(INTERIOR..=1.0 - INTERIOR).contains(&beta)
+            {
+                continue;
+            }
+            out.push(SurfaceContact {
+                tool_feature: feature,
+                surface: [(i, (1.0 - beta) as Real), (j, beta as Real), (0, 0.0)],
+                count: 2,
+                normal: u.as_vec3(),
+                depth: depth as Real,
+                point: (p0 + (p1 - p0) * alpha).as_vec3(),
+            });
         }
     }
 }
