@@ -1,0 +1,200 @@
+//! Stepping a set: the haptic path, the main loop's step around rapier's, and the surfaces'
+//! substeps with the tools' reactions and forces on dynamic tools.
+
+use super::*;
+
+impl SurfaceSet {
+    /// The haptic path: puts `tool` at the device pose `device` (world), steps every surface
+    /// once at its own time step with that tool moving from its last haptic pose (the other
+    /// tools stay where they are), and returns the tool's reaction. No rigid step and no
+    /// collider update: call it at the device's rate (1 kHz and more) between
+    /// [`SurfaceSet::step`]s, which keep the rest of the scene going.
+    pub fn haptic_step(
+        &mut self,
+        world: &PhysicsWorld,
+        tool: ColliderHandle,
+        device: Pose,
+    ) -> Option<ToolReaction> {
+        if !device.is_finite() || !world.colliders.contains(tool) {
+            return None;
+        }
+        let state = self.tools.get_mut(&tool)?;
+        let start = state.haptic_prev.unwrap_or(device);
+        state.haptic_prev = Some(device);
+        let (shape, friction, grasp) = (state.shape.clone(), state.friction, state.grasp);
+        let others: Vec<ToolMotion> = self
+            .tools
+            .iter()
+            .filter(|(h, _)| **h != tool)
+            .filter_map(|(h, t)| {
+                let p = *world.colliders.get(*h)?.position();
+                Some(ToolMotion {
+                    handle: *h,
+                    start: p,
+                    end: p,
+                    shape: t.shape.clone(),
+                    friction: t.friction,
+                    grasp: t.grasp,
+                })
+            })
+            .chain(std::iter::once(ToolMotion {
+                handle: tool,
+                start,
+                end: device,
+                shape,
+                friction,
+                grasp,
+            }))
+            .collect();
+        let mut total = ToolReaction::default();
+        for (_, s, body_pose) in attached_with_pose(&mut self.entries, world) {
+            let h = s.surface.dt();
+            for (th, r) in surface_substep(s, world, &body_pose, &others, h) {
+                if th == tool {
+                    total.force += r.force;
+                    total.torque += r.torque;
+                    total.mean_force += r.force;
+                    total.held_vertices += r.held_vertices;
+                    total.sticking_vertices += r.sticking_vertices;
+                    total.pressed_points += r.pressed_points;
+                }
+            }
+        }
+        if let Some(state) = self.tools.get_mut(&tool) {
+            state.reaction = total;
+        }
+        Some(total)
+    }
+
+    /// Steps rapier, then every surface (see the type's docs).
+    pub fn step(&mut self, world: &mut PhysicsWorld) {
+        self.step_with(world, |w| w.step());
+    }
+
+    /// Like [`SurfaceSet::step`] with your own rigid step (e.g. a
+    /// [`crate::hooks::TouchPipeline`]).
+    pub fn step_with(
+        &mut self,
+        world: &mut PhysicsWorld,
+        rigid_step: impl FnOnce(&mut PhysicsWorld),
+    ) {
+        self.begin_step(&world.colliders);
+        self.drive_haptic_tools(&mut world.bodies, &mut world.colliders);
+        rigid_step(world);
+        self.step_surfaces(world);
+        self.publish_haptic_models(world);
+    }
+
+    /// Records the tools' poses at the start of a rigid step (the first half of
+    /// [`SurfaceSet::step_with`], for engines that own the step).
+    pub(crate) fn begin_step(&mut self, colliders: &ColliderSet) {
+        self.tools.retain(|h, _| colliders.contains(*h));
+        for (h, t) in self.tools.iter_mut() {
+            t.prev = colliders.get(*h).map(|c| *c.position());
+        }
+    }
+
+    /// The surface part of a step: substeps with the tools' poses interpolated from the
+    /// recorded start poses to their current ones, reactions, impulses on dynamic tools, and
+    /// collider updates.
+    pub(crate) fn step_surfaces(&mut self, world: &mut PhysicsWorld) {
+        let dt = world.integration_parameters.dt;
+        for t in self.tools.values_mut() {
+            t.reaction = ToolReaction::default();
+        }
+        let tool_list: Vec<ToolMotion> = self
+            .tools
+            .iter()
+            .filter_map(|(h, t)| {
+                let c = world.colliders.get(*h)?;
+                let now = *c.position();
+                Some(ToolMotion {
+                    handle: *h,
+                    start: t.prev.unwrap_or(now),
+                    end: now,
+                    shape: t.shape.clone(),
+                    friction: t.friction,
+                    grasp: t.grasp,
+                })
+            })
+            .collect();
+        let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
+        let mut touching = parry3d::utils::hashset::HashSet::default();
+        for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
+            let n = s.substeps.max(1);
+            let h = dt / n as Real;
+            for k in 1..=n {
+                let a = k as Real / n as Real;
+                let a_prev = (k - 1) as Real / n as Real;
+                let poses: Vec<ToolMotion> = tool_list
+                    .iter()
+                    .map(|t| ToolMotion {
+                        handle: t.handle,
+                        start: lerp_pose(&t.start, &t.end, a_prev),
+                        end: lerp_pose(&t.start, &t.end, a),
+                        shape: t.shape.clone(),
+                        friction: t.friction,
+                        grasp: t.grasp,
+                    })
+                    .collect();
+                for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {
+                    let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
+                    m.0 += r.force / n as Real;
+                    m.1 += r.torque / n as Real;
+                    if k == n {
+                        if r.held_vertices > 0 || r.pressed_points > 0 {
+                            touching.insert((th, handle));
+                        }
+                        if let Some(t) = self.tools.get_mut(&th) {
+                            t.reaction.force += r.force;
+                            t.reaction.torque += r.torque;
+                            t.reaction.held_vertices += r.held_vertices;
+                            t.reaction.sticking_vertices += r.sticking_vertices;
+                            t.reaction.pressed_points += r.pressed_points;
+                        }
+                    }
+                }
+            }
+        }
+        crate::coupling::events::update(&mut self.touch, touching);
+        // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step).
+        for (_, entry) in self.entries.iter_mut() {
+            let Some(s) = entry.as_mut() else {
+                continue;
+            };
+            if let Some(ch) = s.collider {
+                s.surface.positions_into(&mut s.scratch);
+                if let Some(c) = world.colliders.get_mut(ch) {
+                    if let Some(m) = c.shape_mut().as_trimesh_mut() {
+                        m.set_vertices(&s.scratch);
+                    }
+                }
+            }
+        }
+        // Two-way coupling: dynamic tools carry the averaged reaction as a rapier force during
+        // the next rigid step (one step of lag). The crate's previous contribution is replaced,
+        // the user's own forces on the body are left alone.
+        for (th, t) in self.tools.iter_mut() {
+            let (f, tq) = mean
+                .get(th)
+                .copied()
+                .unwrap_or((Vector::ZERO, Vector::ZERO));
+            t.reaction.mean_force = f;
+            let (f, tq) = if f.is_finite() && tq.is_finite() {
+                (f, tq)
+            } else {
+                (Vector::ZERO, Vector::ZERO)
+            };
+            let Some(parent) = world.colliders.get(*th).and_then(|c| c.parent()) else {
+                continue;
+            };
+            if let Some(b) = world.bodies.get_mut(parent) {
+                if b.is_dynamic() {
+                    b.add_force(f - t.applied.0, true);
+                    b.add_torque(tq - t.applied.1, true);
+                    t.applied = (f, tq);
+                }
+            }
+        }
+    }
+}
