@@ -23,10 +23,6 @@ use rapier_touch::scenes::{run_stress, StressRun, StressScene, StressSide};
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let csv = args.iter().any(|a| a == "--csv");
-    let steps = args
-        .iter()
-        .find_map(|a| a.parse::<usize>().ok())
-        .unwrap_or(300);
     let repeat = args
         .iter()
         .position(|a| a == "--repeat")
@@ -38,7 +34,7 @@ fn main() {
         .enumerate()
         .filter(|(i, _)| *i == 0 || args[i - 1] != "--repeat")
         .find_map(|(_, a)| a.parse::<usize>().ok())
-        .unwrap_or(steps);
+        .unwrap_or(300);
     let only: Vec<&String> = args
         .iter()
         .filter(|a| a.parse::<usize>().is_err() && !a.starts_with("--"))
