@@ -18,7 +18,7 @@ use baraff_witkin::CgScratch;
 use builder::check_spring;
 pub use builder::MassSpringSurfaceBuilder;
 pub use constraints::PointPress;
-use constraints::{constrain, PointHold};
+use constraints::{constrain, ActiveMemory, PointHold};
 
 /// Why a surface could not be built or changed. Each variant says how to fix the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -295,6 +295,8 @@ pub struct MassSpringSurface {
     held_forces: Vec<(u32, DVec3)>,
     any_held: bool,
     point_holds: Vec<PointHold>,
+    /// Which constraint rows pushed in the last filtered step's solve (its warm start).
+    pushing: ActiveMemory,
 }
 
 const NOT_FREE: u32 = u32::MAX;

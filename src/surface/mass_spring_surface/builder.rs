@@ -315,6 +315,7 @@ impl MassSpringSurfaceBuilder {
             held_forces: Vec::new(),
             any_held: false,
             point_holds: Vec::new(),
+            pushing: ActiveMemory::default(),
         };
         s.build_vertex_edges();
         s.rebuild_free();

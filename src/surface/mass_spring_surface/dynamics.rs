@@ -272,6 +272,7 @@ impl MassSpringSurface {
                 &mut self.point_holds,
                 &self.vel,
                 &mut self.dv,
+                &mut self.pushing,
             );
         }
         let mut probe = 0.0;
