@@ -22,6 +22,8 @@ use rapier3d::pipeline::{ActiveHooks, EventHandler, PhysicsHooks, PhysicsWorld, 
 use std::sync::Arc;
 
 mod guard;
+mod hook_flags;
+mod pose_sync;
 mod rapier_contacts;
 
 use guard::PairState;

@@ -1,6 +1,8 @@
 //! The step guard of [`TouchPipeline`]: after rapier's step, moves bodies that penetrate (or
-//! went through something) back to first touch, and keeps the hook flags of fast bodies.
+//! went through something) back to first touch; then the moved bodies' colliders are synced
+//! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
+use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
     collider_pose_now, rapier_contact_of, rapier_normal, supported, RapierContact,
 };
@@ -576,87 +578,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         sync_moved_colliders(world, &mut moved_bodies);
         self.sync_hook_flags(world);
     }
-
-    /// With [`TouchOptions::hook_flags_on_demand`]: raises the hook flag on the managed
-    /// colliders whose body moved more than rapier's prediction distance (and the slop) over
-    /// this step (translation plus the arc of its rotation), clears it on the others.
-    fn sync_hook_flags(&mut self, world: &mut PhysicsWorld) {
-        if !self.options.hook_flags_on_demand {
-            return;
-        }
-        // A body that moved less than rapier's prediction distance met nothing rapier had not
-        // already seen coming (its speculative contacts); the guard corrects the others, so the
-        // hooks only matter for the fast ones.
-        let slop = self
-            .options
-            .penetration_slop
-            .max(world.integration_parameters.prediction_distance());
-        for h in &self.hooked {
-            let Some(co) = world.colliders.get(*h) else {
-                continue;
-            };
-            let moved = co.parent().is_some_and(|bh| {
-                match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
-                    (Some(b), Some(prev)) => {
-                        let now = b.position();
-                        (now.translation - prev.translation).length()
-                            + prev.rotation.angle_between(now.rotation) * collider_reach(co)
-                            > slop
-                    }
-                    _ => false,
-                }
-            });
-            let flags = co.active_hooks();
-            let want = if moved {
-                flags | ActiveHooks::MODIFY_SOLVER_CONTACTS
-            } else {
-                flags - ActiveHooks::MODIFY_SOLVER_CONTACTS
-            };
-            if want != flags {
-                if let Some(co) = world.colliders.get_mut(*h) {
-                    co.set_active_hooks(want);
-                }
-            }
-        }
-    }
 }
 
 /// How far a point of collider `co` can be from its body's origin: the offset to its parent
 /// plus its bounding radius (a turn by `θ` moves it by at most `θ` times this).
-fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
+pub(super) fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
     co.position_wrt_parent()
         .map_or(0.0, |p| p.translation.length())
         + co.shape().compute_local_bounding_sphere().radius
-}
-
-/// Puts the colliders of the bodies the guard moved where their bodies now are, and their
-/// broad-phase boxes with them, so renderers, ray casts and the query pipeline see the
-/// corrected poses right after the step (rapier would only sync them at the next step).
-fn sync_moved_colliders(world: &mut PhysicsWorld, moved: &mut Vec<RigidBodyHandle>) {
-    if moved.is_empty() {
-        return;
-    }
-    world
-        .bodies
-        .propagate_modified_body_positions_to_colliders(&mut world.colliders);
-    moved.sort_unstable_by_key(|h| h.into_raw_parts());
-    moved.dedup();
-    let params = world.integration_parameters;
-    for h in moved.iter() {
-        let Some(body) = world.bodies.get(*h) else {
-            continue;
-        };
-        for ch in body.colliders() {
-            if let Some(co) = world.colliders.get(*ch) {
-                if co.is_enabled() {
-                    let aabb = co.compute_broad_phase_aabb(&params, &world.bodies);
-                    if aabb.mins.is_finite() && aabb.maxs.is_finite() {
-                        world.broad_phase.set_aabb(&params, *ch, aabb);
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// The overlap of a pair when it was last measured, and both bodies' odometers then.

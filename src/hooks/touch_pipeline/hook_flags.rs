@@ -1,0 +1,51 @@
+//! The hook flags [`TouchPipeline`] manages ([`TouchOptions::hook_flags_on_demand`]): raised
+//! only on the colliders of bodies that moved farther than rapier's prediction distance, since
+//! rapier recomputes every hooked pair's contacts every step.
+
+use super::guard::collider_reach;
+use super::*;
+
+impl<H: PhysicsHooks> TouchPipeline<H> {
+    /// With [`TouchOptions::hook_flags_on_demand`]: raises the hook flag on the managed
+    /// colliders whose body moved more than rapier's prediction distance (and the slop) over
+    /// this step (translation plus the arc of its rotation), clears it on the others.
+    pub(super) fn sync_hook_flags(&mut self, world: &mut PhysicsWorld) {
+        if !self.options.hook_flags_on_demand {
+            return;
+        }
+        // A body that moved less than rapier's prediction distance met nothing rapier had not
+        // already seen coming (its speculative contacts); the guard corrects the others, so the
+        // hooks only matter for the fast ones.
+        let slop = self
+            .options
+            .penetration_slop
+            .max(world.integration_parameters.prediction_distance());
+        for h in &self.hooked {
+            let Some(co) = world.colliders.get(*h) else {
+                continue;
+            };
+            let moved = co.parent().is_some_and(|bh| {
+                match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
+                    (Some(b), Some(prev)) => {
+                        let now = b.position();
+                        (now.translation - prev.translation).length()
+                            + prev.rotation.angle_between(now.rotation) * collider_reach(co)
+                            > slop
+                    }
+                    _ => false,
+                }
+            });
+            let flags = co.active_hooks();
+            let want = if moved {
+                flags | ActiveHooks::MODIFY_SOLVER_CONTACTS
+            } else {
+                flags - ActiveHooks::MODIFY_SOLVER_CONTACTS
+            };
+            if want != flags {
+                if let Some(co) = world.colliders.get_mut(*h) {
+                    co.set_active_hooks(want);
+                }
+            }
+        }
+    }
+}
