@@ -9,6 +9,7 @@ use crate::math::{Real, Vector};
 use glamx::DVec3;
 use std::collections::HashMap;
 
+mod active_set;
 mod baraff_witkin;
 mod builder;
 mod changes;
