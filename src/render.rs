@@ -16,7 +16,14 @@
 use crate::math::{Pose, Real, Vector};
 use tiny_skia::{FillRule, LineCap, LineJoin, Paint, PathBuilder, Rect, Stroke, Transform};
 
+mod camera;
 pub mod plot;
+mod text;
+
+use camera::*;
+pub use camera::{Camera, Projection};
+use text::*;
+pub use text::{draw_text, text_size};
 
 pub use tiny_skia::{Color, Pixmap};
 
@@ -37,166 +44,6 @@ pub enum RenderError {
     /// The PNG could not be encoded or written.
     #[error("cannot write the PNG: {0}")]
     Png(String),
-}
-
-/// How a [`Camera`] projects.
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub enum Projection {
-    /// Perspective with this vertical field of view (radians).
-    Perspective {
-        /// Vertical field of view in radians.
-        fov_y: Real,
-    },
-    /// Orthographic, showing `2 half_height` world units from bottom to top.
-    Orthographic {
-        /// Half the world height the picture shows.
-        half_height: Real,
-    },
-}
-
-/// A look-at camera: the picture's centre is `target`, seen from `eye`, `up` pointing up.
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct Camera {
-    /// Where the camera is.
-    pub eye: Vector,
-    /// The point at the picture's centre.
-    pub target: Vector,
-    /// The world direction that appears upward.
-    pub up: Vector,
-    /// Perspective or orthographic.
-    pub projection: Projection,
-}
-
-/// `x` if it is finite and in `lo..hi`, else `default`.
-fn valid(x: Real, lo: Real, hi: Real, default: Real) -> Real {
-    if x.is_finite() && x > lo && x < hi {
-        x
-    } else {
-        default
-    }
-}
-
-const DEFAULT_FOV: Real = 0.6;
-
-impl Camera {
-    /// A perspective camera (0.6 rad, about 35°, vertical field of view) at `eye` looking at
-    /// `target`.
-    pub fn look_at(eye: Vector, target: Vector, up: Vector) -> Self {
-        let projection = Projection::Perspective { fov_y: DEFAULT_FOV };
-        Camera {
-            eye,
-            target,
-            up,
-            projection,
-        }
-    }
-
-    /// A camera looking along `direction` that frames all finite `points` (with a small margin)
-    /// in a picture of the given `aspect` (width / height). An orthographic `projection` gets
-    /// its `half_height` computed; a perspective one keeps its field of view and gets its
-    /// distance. No finite point: a unit region around the origin is framed.
-    pub fn fit(
-        points: impl IntoIterator<Item = Vector>,
-        direction: Vector,
-        up: Vector,
-        projection: Projection,
-        aspect: Real,
-    ) -> Self {
-        let (r, u, f) = basis(direction, up);
-        let mut pts: Vec<Vector> = points.into_iter().filter(|p| p.is_finite()).collect();
-        if pts.is_empty() {
-            pts = vec![Vector::splat(-0.5), Vector::splat(0.5)];
-        }
-        let aspect = valid(aspect, 0.0, Real::INFINITY, 1.0);
-        let lo = pts.iter().fold(Vector::MAX, |m, p| m.min(*p));
-        let hi = pts.iter().fold(Vector::MIN, |m, p| m.max(*p));
-        let mut c = 0.5 * (lo + hi);
-        let (mut x0, mut x1, mut y0, mut y1) = (Real::MAX, Real::MIN, Real::MAX, Real::MIN);
-        for p in &pts {
-            let (x, y) = ((*p - c).dot(r), (*p - c).dot(u));
-            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-        }
-        c += r * 0.5 * (x0 + x1) + u * 0.5 * (y0 + y1);
-        let (margin, radius) = (1.08, (hi - lo).length().max(1e-6));
-        let (eye, projection) = match projection {
-            Projection::Orthographic { .. } => {
-                let half = (0.5 * (y1 - y0)).max(0.5 * (x1 - x0) / aspect).max(1e-6);
-                let projection = Projection::Orthographic {
-                    half_height: half * margin,
-                };
-                (c - f * 2.0 * radius, projection)
-            }
-            Projection::Perspective { fov_y } => {
-                let fov_y = valid(fov_y, 0.01, 3.0, DEFAULT_FOV);
-                let t = (0.5 * fov_y).tan();
-                let mut dist: Real = 1e-3 * radius;
-                for p in &pts {
-                    let d = *p - c;
-                    let need = (d.dot(u).abs() / t).max(d.dot(r).abs() / (t * aspect));
-                    dist = dist
-                        .max(need * margin - d.dot(f))
-                        .max(0.01 * radius - d.dot(f));
-                }
-                (c - f * dist, Projection::Perspective { fov_y })
-            }
-        };
-        Camera {
-            eye,
-            target: c,
-            up,
-            projection,
-        }
-    }
-
-    /// The same view, `factor` times wider (a factor above 1 zooms out): an orthographic
-    /// camera's `half_height` is scaled, a perspective camera moves along its line of sight.
-    pub fn zoomed(mut self, factor: Real) -> Self {
-        let factor = valid(factor, 0.0, Real::INFINITY, 1.0);
-        match &mut self.projection {
-            Projection::Orthographic { half_height } => *half_height *= factor,
-            Projection::Perspective { .. } => {
-                self.eye = self.target + (self.eye - self.target) * factor;
-            }
-        }
-        self
-    }
-
-    /// World units per pixel at the target's depth, in a picture `height` pixels high.
-    pub fn world_per_pixel(&self, height: u32) -> Real {
-        let half = match self.projection {
-            Projection::Orthographic { half_height } => half_height,
-            Projection::Perspective { fov_y } => {
-                (self.target - self.eye).length() * (0.5 * fov_y).tan()
-            }
-        };
-        2.0 * half / height.max(1) as Real
-    }
-
-    /// Picture coordinates (pixels, `y` down) and view depth of `p`, or `None` if it is behind
-    /// a perspective camera or not finite.
-    pub fn project(&self, p: Vector, width: u32, height: u32) -> Option<(f32, f32, f32)> {
-        let (r, u, f) = basis(self.target - self.eye, self.up);
-        let d = p - self.eye;
-        let (x, y, z) = (d.dot(r), d.dot(u), d.dot(f));
-        let scale = match self.projection {
-            Projection::Perspective { fov_y } if z > 1e-6 => 1.0 / (z * (0.5 * fov_y).tan()),
-            Projection::Perspective { .. } => return None,
-            Projection::Orthographic { half_height } => 1.0 / half_height,
-        };
-        let h = 0.5 * height as f32;
-        let s = (0.5 * width as f32 + x * scale * h, h - y * scale * h, z);
-        (s.0.is_finite() && s.1.is_finite() && z.is_finite()).then_some(s)
-    }
-}
-
-/// Right, up and forward unit vectors of a view along `forward` with `up` as the up hint.
-fn basis(forward: Vector, up: Vector) -> (Vector, Vector, Vector) {
-    let f = forward.normalize_or(Vector::NEG_Z);
-    let mut r = f.cross(up).normalize_or_zero();
-    if r == Vector::ZERO {
-        r = f.any_orthonormal_vector();
-    }
-    (r, r.cross(f), f)
 }
 
 /// A colour from channels, each clamped to `0..=1`.
@@ -695,60 +542,6 @@ fn draw_legend(pm: &mut Pixmap, l: &Legend) {
     text(pm, left(&l.high), y0 - 16.0, 2.0, &l.high, dark);
     text(pm, left(&l.low), y1 + 8.0, 2.0, &l.low, dark);
     text(pm, left(&l.title), y0 - 40.0, 2.0, &l.title, dark);
-}
-
-const FONT_CHARS: &str = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ.-:=/()+,%|_'*<>[]";
-/// 3 × 5 glyphs, one octal digit per row (top row first, left column the high bit).
-const FONT_BITS: [u16; 54] = [
-    0o75557, 0o26227, 0o71747, 0o71717, 0o55711, 0o74717, 0o74757, 0o71122, 0o75757, 0o75717,
-    0o25755, 0o65656, 0o34443, 0o65556, 0o74647, 0o74644, 0o34553, 0o55755, 0o72227, 0o11152,
-    0o55655, 0o44447, 0o57755, 0o65555, 0o25552, 0o65644, 0o25563, 0o65655, 0o34216, 0o72222,
-    0o55557, 0o55552, 0o55775, 0o55255, 0o55222, 0o71247, 0o00002, 0o00700, 0o02020, 0o07070,
-    0o11244, 0o24442, 0o21112, 0o02720, 0o00024, 0o51245, 0o22222, 0o00007, 0o22000, 0o05250,
-    0o12421, 0o42124, 0o64446, 0o31113,
-];
-
-/// Writes `s` on `pixmap` with the built-in 3 × 5 pixel font, its top left corner at `(x, y)`,
-/// each font pixel `scale` pixels wide (a character advances 4 font pixels, a line 6). Lower
-/// case is drawn as upper case; characters the font lacks (see the [module docs](self)) leave
-/// a blank; `\n` starts a new line.
-///
-/// ```
-/// use rapier_touch::render::{draw_text, text_size, Color, Pixmap};
-/// let mut pm = Pixmap::new(120, 40).unwrap();
-/// draw_text(&mut pm, 4.0, 4.0, 2.0, "F = 0.25 N", Color::BLACK);
-/// assert_eq!(text_size("F = 0.25 N", 2.0), (78.0, 10.0));
-/// ```
-pub fn draw_text(pixmap: &mut Pixmap, x: f32, y: f32, scale: f32, s: &str, color: Color) {
-    text(pixmap, x, y, scale, s, color);
-}
-
-/// Width and height in pixels of `s` as [`draw_text`] writes it at `scale` (the longest
-/// line; trailing spacing excluded).
-pub fn text_size(s: &str, scale: f32) -> (f32, f32) {
-    let lines = s.lines().count().max(1);
-    let chars = s.lines().map(|l| l.chars().count()).max().unwrap_or(0);
-    let w = (4 * chars).saturating_sub(1) as f32 * scale;
-    (w, (6 * lines - 1) as f32 * scale)
-}
-
-/// Writes `s` with its top left corner at `(x, y)`, each font pixel `scale` pixels wide.
-fn text(pm: &mut Pixmap, x: f32, y: f32, scale: f32, s: &str, c: Color) {
-    let p = paint(c);
-    for (line, s) in s.lines().enumerate() {
-        for (k, ch) in s.chars().enumerate() {
-            let Some(i) = FONT_CHARS.find(ch.to_ascii_uppercase()) else {
-                continue;
-            };
-            for bit in (0..15).filter(|b| FONT_BITS[i] >> (14 - b) & 1 == 1) {
-                let px = x + (4 * k + bit % 3) as f32 * scale;
-                let py = y + (6 * line + bit / 3) as f32 * scale;
-                if let Some(r) = Rect::from_xywh(px, py, scale, scale) {
-                    pm.fill_rect(r, &p, Transform::identity(), None);
-                }
-            }
-        }
-    }
 }
 
 #[cfg(test)]
