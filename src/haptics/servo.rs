@@ -46,7 +46,8 @@ pub struct Servo<D: HapticDevice> {
     coupling: VirtualCoupling,
     period: Real,
     ticks: u64,
-    last: Option<(Vector, Vector)>,
+    /// The last tick, when its device position and proxy were finite.
+    last: Option<LastTick>,
     /// The latest model read.
     current: ServoModel,
     /// The force offset at the first tick under `current` (faded out over `interval`).
@@ -55,15 +56,11 @@ pub struct Servo<D: HapticDevice> {
     /// measured yet, no blending).
     since_update: u32,
     interval: Real,
-    /// The last tick's proxy and the surfaces' force rendered there.
-    last_surface: Option<(Vector, Vector)>,
     /// Whether updates are ramped in ([`Servo::set_update_ramp`]).
     ramp: bool,
     /// The energy the hand has put into the loop (J: the work of the rendered force on the
-    /// device, negated), the force the last tick rendered, and the work the current
-    /// offset has done on the proxy (J).
+    /// device, negated), and the work the current offset has done on the proxy (J).
     reserve: f64,
-    last_force: Vector,
     offset_work: f64,
 }
 
@@ -124,10 +121,8 @@ impl<D: HapticDevice> Servo<D> {
             offset: Vector::ZERO,
             since_update: 0,
             interval: 0.0,
-            last_surface: None,
             ramp: true,
             reserve: 0.0,
-            last_force: Vector::ZERO,
             offset_work: 0.0,
         })
     }
@@ -169,9 +164,9 @@ impl<D: HapticDevice> Servo<D> {
         self.current.copy_from(model);
         self.since_update = 0;
         self.offset_work = 0.0;
-        self.offset = match self.last_surface {
-            Some((proxy, rendered)) if self.ramp && self.interval > 1.0 => {
-                let o = rendered - self.current.force_at(proxy);
+        self.offset = match self.last {
+            Some(last) if self.ramp && self.interval > 1.0 => {
+                let o = last.surface_force - self.current.force_at(last.proxy);
                 if o.is_finite() {
                     o
                 } else {
@@ -212,7 +207,7 @@ impl<D: HapticDevice> Servo<D> {
         } else {
             (x, Vector::ZERO)
         };
-        if let Some((_, p)) = self.last {
+        if let Some(LastTick { proxy: p, .. }) = self.last {
             // The ramp's energy budget: the offset may push the proxy out of the surfaces
             // with no more work than the hand has put in; past that, it fades out faster.
             // Only the push out is booked: pressing in, the hand does the work, and an
@@ -229,7 +224,10 @@ impl<D: HapticDevice> Servo<D> {
             }
         }
         let (dv, pv) = match self.last {
-            Some((d, p)) => ((x - d) / self.period, (proxy - p) / self.period),
+            Some(l) => (
+                (x - l.device) / self.period,
+                (proxy - l.proxy) / self.period,
+            ),
             None => (Vector::ZERO, Vector::ZERO),
         };
         let force = if proxy.is_finite() && x.is_finite() {
@@ -237,21 +235,24 @@ impl<D: HapticDevice> Servo<D> {
         } else {
             Vector::ZERO
         };
-        if let Some((d, _)) = self.last {
+        if let Some(l) = self.last {
             // The work the last tick's force, held over the tick, did on the device.
-            self.reserve -= self.last_force.dot(x - d) as f64;
+            self.reserve -= l.force.dot(x - l.device) as f64;
         }
         if surface_force == Vector::ZERO || !self.reserve.is_finite() {
             // Out of contact the surfaces hold nothing for the hand.
             self.reserve = 0.0;
             self.offset_work = 0.0;
         }
-        self.last_force = force;
         self.device.set_force(workspace.force_to_device(force));
         self.device.end_tick();
-        self.last = Some((x, proxy)).filter(|(a, b)| a.is_finite() && b.is_finite());
-        self.last_surface =
-            Some((proxy, surface_force)).filter(|(p, f)| p.is_finite() && f.is_finite());
+        self.last = Some(LastTick {
+            device: x,
+            proxy,
+            force,
+            surface_force,
+        })
+        .filter(|l| l.device.is_finite() && l.proxy.is_finite());
         self.ticks += 1;
         self.link.send(DeviceSample {
             tick: self.ticks,
@@ -416,6 +417,16 @@ impl<D: HapticDevice> Drop for ServoThread<D> {
             let _ = h.join();
         }
     }
+}
+
+/// What a tick saw and rendered (world frame): the device's position, the proxy, the force
+/// rendered (held over the next tick) and the surfaces' force at the proxy.
+#[derive(Copy, Clone, Debug)]
+struct LastTick {
+    device: Vector,
+    proxy: Vector,
+    force: Vector,
+    surface_force: Vector,
 }
 
 /// The share of the update interval over which a new model's offset fades: the ramp ends
