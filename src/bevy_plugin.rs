@@ -431,7 +431,7 @@ fn register(
         .map(|(e, _, _)| e)
         .collect();
     let new_tools: Vec<(Entity, ColliderHandle)> = tools.iter().map(|(e, h)| (e, h.0)).collect();
-    let mut links: Vec<(Entity, ColliderHandle, WorldLink)> = haptic
+    let links: Vec<(Entity, ColliderHandle, WorldLink)> = haptic
         .iter_mut()
         .filter_map(|(e, h, mut t)| t.link.take().map(|l| (e, h.0, l)))
         .collect();
@@ -466,7 +466,7 @@ fn register(
                 }
             }
         }
-        for (e, h, link) in links.drain(..) {
+        for (e, h, link) in links {
             match touch.surfaces.connect_haptic(h, link, world) {
                 Ok(()) => {
                     commands.entity(e).insert(SurfaceToolReaction::default());

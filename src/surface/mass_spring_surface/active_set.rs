@@ -5,17 +5,18 @@
 /// Solves `A x = b` for contact rows that push (an active set, Lawson-Hanson style): a row
 /// with `push_only(i)` must end with `xᵢ ≥ 0`, the others may have any sign; a row left out has
 /// `xᵢ = 0` and must end satisfied, `bᵢ - (A x)ᵢ ≤ tol` (the other rows' pushes did its work).
-/// Each pass drops the push-only rows that pull, or else takes back the violated rows left
-/// out; at most `2m + 2` passes. Returns `x` (zero on the rows left out) and which rows are in, or
-/// `None` when a solve fails or is not finite. Shared by the presses' position projection and
-/// the filtered step's impulses.
+/// The push-only rows start in where `starts_in` says. Each pass drops the push-only rows that
+/// pull, or else takes back the violated rows left out; at most `2m + 2` passes. Returns `x`
+/// (zero on the rows left out) and which rows are in, or `None` when a solve fails or is not
+/// finite.
 ///
 /// Rows that (nearly) repeat rows already in are left out for good: with targets that differ
 /// a little, a near-singular system answers with huge opposite impulses (a cube corner next to
 /// a triangle edge gave a vertex press and an edge press on almost the same weights: 775 N on
-/// a 3 N contact, then the plate tangled). Each pass factorizes its rows in priority order
-/// (the rows that are not push-only, then the push-only ones by decreasing `b`) and a row whose
-/// pivot is below [`REDUNDANT`] of its diagonal is the one left out.
+/// a 3 N contact, then the plate tangled). The first factorization takes the rows in priority
+/// order (the rows that are not push-only, then the push-only ones by decreasing `b`); a row
+/// that comes back later is appended after the rows kept. A row whose pivot is below
+/// [`REDUNDANT`] of its diagonal is the one left out.
 pub(super) fn solve_pushing(
     a: &nalgebra::DMatrix<f64>,
     b: &nalgebra::DVector<f64>,
