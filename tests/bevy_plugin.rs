@@ -110,9 +110,25 @@ fn a_tracked_floor_stops_a_fast_box_that_rapier_alone_lets_through() {
     assert!((end - 0.01).abs() < 5e-3, "resting bottom {end} m");
 }
 
-/// The force pressing the centre vertex `c` of the plate to depth `d` with the rim pinned
-/// and the other vertices in equilibrium (linear springs `k` on every edge): `-(L u)_c`.
-fn static_force(triangles: &[[u32; 3]], n: usize, pins: &[u32], c: usize, d: f64, k: f64) -> f64 {
+/// A plate 1 m square of `cells` × `cells`, clamped at its rim, edges of `k`, 0.1 kg in all.
+fn rim_plate(cells: u32, k: f32) -> MassSpringSurfaceBuilder {
+    MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, cells, cells))
+        .stiffness(k)
+        .mass(MassDistribution::Total(0.1))
+        .pinned(plate_rim(cells, cells))
+}
+
+/// The index of [`rim_plate`]'s centre vertex.
+fn centre_vertex(cells: u32) -> usize {
+    (cells / 2 * (cells + 1) + cells / 2) as usize
+}
+
+/// The force pressing the centre vertex of [`rim_plate`] to depth `d` with the rim pinned and
+/// the other vertices in equilibrium (linear springs `k` on every edge): `-(L u)_c`.
+fn static_force(cells: u32, d: f64, k: f64) -> f64 {
+    let mesh = plate(1.0, 1.0, cells, cells);
+    let (triangles, n) = (&mesh.triangles, mesh.vertices.len());
+    let (pins, c) = (plate_rim(cells, cells), centre_vertex(cells));
     let lap = common::edge_laplacian(triangles, n, k);
     let known: Vec<bool> = (0..n)
         .map(|i| i == c || pins.contains(&(i as u32)))
@@ -128,15 +144,8 @@ fn a_tool_dents_a_soft_plate_its_mesh_follows_and_its_reaction_matches_a_static_
     let mut app = app(true);
     // A plate 1 m square, 10 x 10 cells, clamped at its rim, on a turned and moved body.
     let (cells, k, depth, r) = (10, 100.0, 0.01, 0.02);
-    let soft = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, cells, cells))
-        .stiffness(k)
-        .mass(MassDistribution::Total(0.1))
-        .pinned(plate_rim(cells, cells))
-        .build()
-        .unwrap();
-    let triangles = soft.triangles().to_vec();
-    let n = soft.num_vertices();
-    let centre = (cells / 2 * (cells + 1) + cells / 2) as usize;
+    let soft = rim_plate(cells, k).build().unwrap();
+    let centre = centre_vertex(cells);
     let mesh = app
         .world_mut()
         .resource_mut::<Assets<Mesh>>()
@@ -185,14 +194,7 @@ fn a_tool_dents_a_soft_plate_its_mesh_follows_and_its_reaction_matches_a_static_
     // The reaction component: up along the plate's normal, the static solve's size.
     let reaction = app.world().get::<SurfaceToolReaction>(ball).unwrap().0;
     assert_eq!(reaction.held_vertices, 1);
-    let expected = static_force(
-        &triangles,
-        n,
-        &plate_rim(cells, cells),
-        centre,
-        depth as f64,
-        k as f64,
-    );
+    let expected = static_force(cells, depth as f64, k as f64);
     let normal = body.rotation * Vec3::Y;
     let got = reaction.force.dot(normal) as f64;
     assert!(
@@ -281,16 +283,7 @@ fn a_haptic_tool_follows_its_servo_and_the_hand_feels_the_plate() {
 
     let mut app = app(true);
     let (cells, k, r) = (10, 100.0, 0.02);
-    let soft = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, cells, cells))
-        .stiffness(k)
-        .damping(0.2)
-        .mass(MassDistribution::Total(0.1))
-        .pinned(plate_rim(cells, cells))
-        .build()
-        .unwrap();
-    let triangles = soft.triangles().to_vec();
-    let n = soft.num_vertices();
-    let centre = (cells / 2 * (cells + 1) + cells / 2) as usize;
+    let soft = rim_plate(cells, k).damping(0.2).build().unwrap();
     let options = AttachOptions {
         substeps: 8,
         collider: true,
@@ -346,14 +339,7 @@ fn a_haptic_tool_follows_its_servo_and_the_hand_feels_the_plate() {
     let depth = r - tool.y;
     assert!(depth > 5e-3, "the tool is {depth} m into the plate");
     // The plate's reaction is the static solve's at the tool's depth; the hand feels it.
-    let expected = static_force(
-        &triangles,
-        n,
-        &plate_rim(cells, cells),
-        centre,
-        depth as f64,
-        k as f64,
-    );
+    let expected = static_force(cells, depth as f64, k as f64);
     let got = reaction.force.y as f64;
     assert!(
         (got - expected).abs() <= 0.05 * expected,
