@@ -8,6 +8,7 @@
 //! jump over 5 % of the peak, no energy to the hand); threads exchanging models while the
 //! world steps, refactors and swaps tools never deadlock, tear a model or panic.
 
+use proptest::prelude::*;
 use rapier_touch::haptics::{haptic_link, Servo, ServoModel, SimulatedHand, VirtualCoupling};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::math::Matrix;
@@ -504,12 +505,47 @@ struct SlowRun {
 /// two world steps the servo ticks 40 to 200 times (8-40 ms of the hand's time; 24 ms on
 /// average for a 16.7 ms step), as when a large surface's step outlasts its `dt`.
 fn slow_world_run(ramp: bool) -> SlowRun {
+    let ball = SharedShape::ball(0.03);
+    slow_world_run_on(
+        ramp,
+        SlowScene {
+            scale: 1.0,
+            k: 400.0,
+            mass: 0.5,
+            tool: ball,
+            seed: 12345,
+        },
+    )
+}
+
+/// The scene of [`slow_world_run_on`]: the 0.3 m plate of 24 cells and the 3 cm tool scaled by
+/// `scale` (the hand's path with them), edges of `k`, `mass` in all, the schedule from `seed`.
+struct SlowScene {
+    scale: f32,
+    k: f32,
+    mass: f32,
+    tool: SharedShape,
+    seed: u32,
+}
+
+/// [`slow_world_run`] on any [`SlowScene`].
+fn slow_world_run_on(ramp: bool, scene: SlowScene) -> SlowRun {
     let rate = 5000.0;
-    let scene = plate_scene(0.3, 24, 400.0, 0.5, 1, SharedShape::ball(0.03));
-    let (mut world, mut set, tool, _) = scene;
+    let SlowScene {
+        scale,
+        k,
+        mass,
+        tool,
+        seed,
+    } = scene;
+    let (mut world, mut set, tool, _) = plate_scene(0.3 * scale, 24, k, mass, 1, tool);
     let (world_end, servo_end) = haptic_link();
     set.connect_haptic(tool, world_end, &mut world).unwrap();
-    let hand = SimulatedHand::new(rate, press_drag_lift(0.02, 0.03)).unwrap();
+    let path = press_drag_lift(0.02, 0.03);
+    let hand = SimulatedHand::new(rate, move |t| {
+        Pose::from_translation(path(t).translation * scale)
+    })
+    .unwrap();
     let coupling = VirtualCoupling {
         stiffness: 0.5 * VirtualCoupling::max_passive_stiffness(rate, 2.0),
         damping: 0.0,
@@ -525,7 +561,7 @@ fn slow_world_run(ramp: bool) -> SlowRun {
         contact_loss: 0.0,
     };
     // A fixed linear congruential sequence: the same irregular schedule on every run.
-    let mut state = 12345u32;
+    let mut state = seed;
     let (mut ticks, mut last) = (0usize, Vector::ZERO);
     while ticks < (4.5 * rate) as usize {
         state = state.wrapping_mul(1_103_515_245).wrapping_add(12_345);
@@ -588,6 +624,37 @@ fn a_slow_irregular_world_is_eased_in_without_knocks_or_energy() {
     );
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+
+    /// The servo's model on scenes nobody tuned: plates from 0.3 mm to 3 km (the hand's path
+    /// scaled with them), soft to stiff edges, 10 g to 1 t, any irregular schedule of slow
+    /// world steps. The rendering should never give the hand more energy than its own damping
+    /// took while in contact. Known bug, so ignored: it fails on heavy, stiff plates even
+    /// without the update ramp (0.3 m, 883 N/m, 750 kg: the hand got 0.025 J, its damping took
+    /// 0.0092 J; cases kept in tests/proptest-regressions/haptic_servo.txt). With the ramp it
+    /// fails sooner (the ignored test below), and cube tools fail it too.
+    #[test]
+    #[ignore = "known bug (issue 14): the servo model is not passive on heavy, stiff plates in a slow irregular world"]
+    fn the_servo_model_never_gives_the_hand_energy_at_any_scale(
+        log_scale in -3.0f32..4.0,
+        k in 10.0f32..2000.0,
+        log_mass in -2.0f32..3.0,
+        seed in any::<u32>(),
+    ) {
+        let scale = 10f32.powf(log_scale);
+        let tool = SharedShape::ball(0.03 * scale);
+        let mass = 10f32.powf(log_mass);
+        let r = slow_world_run_on(false, SlowScene { scale, k, mass, tool, seed });
+        prop_assert!(r.peak.is_finite() && r.across.is_finite() && r.within.is_finite());
+        prop_assert!(
+            r.rendered_work <= r.contact_loss + 1e-9,
+            "scale {} m, k {} N/m, {} kg: the rendering gave the hand {} J, its damping took {} J",
+            0.3 * scale, k, mass, r.rendered_work, r.contact_loss
+        );
+    }
+}
+
 #[test]
 fn a_hand_striking_a_fine_damped_plate_comes_to_rest_on_it() {
     // The 100,000-node plate of the servo bench (edges of 100 N/m with 1 N·s/m dampers, on
@@ -641,4 +708,59 @@ fn a_hand_striking_a_fine_damped_plate_comes_to_rest_on_it() {
         (held - rendered).abs() < 0.02 * rendered,
         "arm {held} N, rendered {rendered} N"
     );
+}
+
+#[test]
+#[ignore = "known bug (issue 13/14): a cube dragged sideways while pressed deep gives force \
+            spikes (2 kN against a ~100 N static press, scripted, no servo) and, through the \
+            servo, energy to the hand"]
+fn a_cube_dragged_deep_in_a_plate_gives_the_hand_no_energy() {
+    // The property test's minimal failing case with a cube: a 6.5 cm cube pressed 4.3 cm into
+    // a 0.65 m plate of 27.6 N/m edges and 1 kg, dragged 6.5 cm, without the ramp. Measured:
+    // the hand got 2.15 J from the rendering while its damping took 1.11 J (the run is
+    // sensitive: 12 J against 4.4 J with the scale's last digit changed); at 400 N/m the full
+    // solution reached 11 MN, and a scripted cube on that plate (no servo) 2 kN against a
+    // static press of about 100 N.
+    let scale = 10f32.powf(0.856_107_83);
+    let tool = SharedShape::cuboid(0.03 * scale, 0.03 * scale, 0.03 * scale);
+    let scene = SlowScene {
+        scale,
+        k: 27.639,
+        mass: 1.0,
+        tool,
+        seed: 349_190_831,
+    };
+    let r = slow_world_run_on(true, scene);
+    assert!(
+        r.rendered_work <= r.contact_loss,
+        "the rendering gave the hand {} J, its damping took {} J",
+        r.rendered_work,
+        r.contact_loss
+    );
+}
+
+#[test]
+#[ignore = "known bug (issue 14): the update ramp's energy budget does not make it passive on \
+            stiff, heavy plates in a slow irregular world"]
+fn the_eased_rendering_never_gives_the_hand_energy() {
+    // Cases the property test above found with the ramp on (0.3 m plates, 1 kg, ball tools).
+    // Measured: at 1602 N/m the hand got 0.053 J while its damping took 0.020 J (0.0008 J
+    // against 0.0049 J without the ramp); at 770 N/m, 0.0071 J against 0.0061 J.
+    for (k, seed) in [(1_601.874_3, 630_297_028), (769.788_27, 1_600_801_739)] {
+        let tool = SharedShape::ball(0.03);
+        let scene = SlowScene {
+            scale: 1.0,
+            k,
+            mass: 1.0,
+            tool,
+            seed,
+        };
+        let r = slow_world_run_on(true, scene);
+        assert!(
+            r.rendered_work <= r.contact_loss,
+            "k {k}: the rendering gave the hand {} J, its damping took {} J",
+            r.rendered_work,
+            r.contact_loss
+        );
+    }
 }
