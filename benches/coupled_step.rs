@@ -21,6 +21,9 @@
 //! in a 1 kHz world, 1 substep, neighbour filter. The set-up prints each scene's filter. Targets (one core): 790 nodes and 6 tools ≤ 300 µs per full
 //! step, the haptic path ≤ 50 µs, 10,000 nodes with 2 tools ≤ 1 ms.
 //!
+//! `100kn_6cubes_1khz`: the contact search alone on a 100,000-node plate pressed by the six
+//! cubes (`bench_search_100k`), against the linear scans it replaced, and the full step there.
+//!
 //! Run with `cargo bench --bench coupled_step`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -48,12 +51,24 @@ fn tool_pose(k: usize, n: usize, centre: Vector, t: f32) -> Pose {
 }
 
 fn scene(side: u32, tools: usize, substeps: u32, dt: f32, cubes: bool, friction: bool) -> Scene {
+    scene_sized(SIZE, side, tools, substeps, dt, cubes, friction)
+}
+
+fn scene_sized(
+    size: f32,
+    side: u32,
+    tools: usize,
+    substeps: u32,
+    dt: f32,
+    cubes: bool,
+    friction: bool,
+) -> Scene {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
     };
     world.integration_parameters.dt = dt;
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(SIZE, SIZE, side, side))
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, side, side))
         .stiffness(10.0)
         .damping(0.05)
         .mass(MassDistribution::PerVertex(2e-3))
@@ -231,5 +246,156 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The contact search per surface substep on a 100,000-node plate (316 x 316 cells of 11 mm,
+/// the 784-node plate's mesh spacing over 3.5 m) pressed by the six 4 cm cubes of the
+/// `784n_6cubes` scene, near its middle, in a 1 kHz world: what the coupling does to find the
+/// contacts, timed alone while the real coupled step runs (untimed) between samples.
+///
+/// - `search_bvh`: the crate's search: the [`SurfaceBvh`] brought up to date with the vertices
+///   that moved farther than its slack (found here by a scan, untimed; the surface notes them
+///   as its integrator moves them), then per cube the vertices near it (each tested against
+///   the cube, as the vertex holds do) and the triangles its sweep may meet, filtered by their
+///   own bounds, and the cube's vertex-face and edge-edge contacts with them;
+/// - `search_scan`: the same contacts from linear scans (every vertex against each cube's box,
+///   every triangle's bounds once and against each cube's sweep): what the coupling did before.
+fn bench_search_100k(c: &mut Criterion) {
+    use rapier_touch::geometry::{
+        tool_surface_contacts, triangles_in, SurfaceBvh, SurfaceSnapshot,
+    };
+    use rapier_touch::parry3d::bounding_volume::BoundingVolume;
+    use rapier_touch::parry3d::query::PointQuery;
+    use std::time::Instant;
+
+    let side = 316;
+    let dt = 1.0 / 1000.0;
+    let mut s = scene_sized(SIZE * side as f32 / 27.0, side, 6, 1, dt, true, false);
+    let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(R))).unwrap();
+    let shape = Cuboid::new(Vector::splat(R));
+    let positions = |s: &Scene| {
+        let mut p = Vec::new();
+        s.set.get(s.soft).unwrap().surface.positions_into(&mut p);
+        p
+    };
+    let triangles = s.set.get(s.soft).unwrap().surface.triangles().to_vec();
+    let mut now = positions(&s);
+    let edge = {
+        let t = triangles[0];
+        (now[t[0] as usize] - now[t[1] as usize]).length()
+    };
+    // The coupling's slack: a quarter of an edge.
+    let slack = 0.25 * edge;
+    let mut bvh = SurfaceBvh::new(&now, &triangles, slack);
+    let mut reference = now.clone();
+    let (mut moved, mut verts, mut tris, mut contacts) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut bounds = Vec::new();
+    let (mut candidates_seen, mut moved_seen, mut contacts_seen, mut samples) = (0, 0, 0, 0);
+    let mut g = c.benchmark_group("coupled_step");
+    g.sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(3));
+    for (name, scan, tests) in [
+        ("search_bvh", false, true),
+        ("search_scan", true, true),
+        ("candidates_bvh", false, false),
+    ] {
+        g.bench_function(format!("100kn_6cubes_1khz/{name}"), |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    let t0 = s.t;
+                    s.full_step();
+                    let before = std::mem::replace(&mut now, positions(&s));
+                    moved.clear();
+                    for (v, (p, r)) in now.iter().zip(reference.iter_mut()).enumerate() {
+                        if (*p - *r).length() > slack {
+                            *r = *p;
+                            moved.push(v as u32);
+                        }
+                    }
+                    let n = s.tools.len();
+                    let poses: Vec<(Pose, Pose)> = s
+                        .tools
+                        .iter()
+                        .enumerate()
+                        .map(|(k, (_, _, c))| (tool_pose(k, n, *c, t0), tool_pose(k, n, *c, s.t)))
+                        .collect();
+                    let snapshot = SurfaceSnapshot {
+                        before: &before,
+                        now: &now,
+                        triangles: &triangles,
+                    };
+                    let start = Instant::now();
+                    contacts.clear();
+                    let mut near = 0usize;
+                    if !scan {
+                        bvh.update(&moved, &now, &before);
+                    } else {
+                        snapshot.triangle_bounds(&mut bounds);
+                    }
+                    for (from, to) in &poses {
+                        let aabb = cube.local_aabb().transform_by(to);
+                        let box_ = aabb.loosened(1e-4 * edge);
+                        let swept = aabb.merged(&cube.local_aabb().transform_by(from));
+                        let query = swept.loosened(2e-4 * edge);
+                        if scan {
+                            verts.clear();
+                            verts.extend(
+                                (0..now.len() as u32)
+                                    .filter(|&v| box_.contains_local_point(now[v as usize])),
+                            );
+                            triangles_in(&bounds, &query, &mut tris);
+                        } else {
+                            // One walk of the tree for both, as the coupling does.
+                            bvh.near(&query.merged(&box_), &mut tris, &mut verts);
+                            tris.retain(|&t| {
+                                snapshot
+                                    .swept_bounds(t)
+                                    .is_some_and(|b| b.intersects(&query))
+                            });
+                        }
+                        for &v in verts.iter().filter(|_| tests) {
+                            let p = now[v as usize];
+                            if box_.contains_local_point(p) {
+                                near +=
+                                    (shape.distance_to_point(to, p, true) <= 1e-4 * edge) as usize;
+                            }
+                        }
+                        if tests {
+                            tool_surface_contacts(
+                                &snapshot,
+                                &tris,
+                                &cube,
+                                from,
+                                to,
+                                1e-4 * edge,
+                                &mut contacts,
+                            );
+                        }
+                    }
+                    total += start.elapsed();
+                    candidates_seen += verts.len() + tris.len() + near;
+                    moved_seen += moved.len();
+                    contacts_seen += contacts.len();
+                    samples += 1;
+                }
+                total
+            })
+        });
+        println!(
+            "{name}: per substep {:.0} vertices moved past the slack ({slack:.2e} m), {:.0} contacts",
+            moved_seen as f64 / samples.max(1) as f64,
+            contacts_seen as f64 / samples.max(1) as f64,
+        );
+        println!(
+            "{name}: {:.0} candidates (vertices, triangles, vertices in a cube) per substep",
+            candidates_seen as f64 / samples.max(1) as f64
+        );
+        (candidates_seen, moved_seen, contacts_seen, samples) = (0, 0, 0, 0);
+    }
+    g.bench_function("100kn_6cubes_1khz/full", |b| b.iter(|| s.full_step()));
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_search_100k);
 criterion_main!(benches);

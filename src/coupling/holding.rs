@@ -4,10 +4,9 @@
 //! gets the reaction of the vertices it holds.
 
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
-use super::pressing::{find_contacts, press_all, reaction_of, record_impulses};
+use super::pressing::{find_contacts, part_query, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::{contact_margin, ToolShape};
-use crate::geometry::SurfaceSnapshot;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -62,22 +61,47 @@ pub(super) fn surface_substep(
     h: Real,
 ) -> Vec<(ColliderHandle, ToolReaction)> {
     let inv = body_pose.inverse();
-    retarget_holds(&mut s.surface, world, tools, &inv, h);
+    retarget_holds(&mut s.surface, &s.held_list, world, tools, &inv, h);
     s.surface.positions_into(&mut s.before);
     s.surface.step();
     record_impulses(&s.surface, &mut s.pressed);
     std::mem::swap(&mut s.pressed, &mut s.last_pressed);
     s.pressed.clear();
-    s.was_held.clear();
-    s.was_held
-        .extend((0..s.surface.num_vertices() as u32).map(|i| s.surface.is_held(i)));
+    // Which vertices the tools held through this step: marked in `was_held` (all false but
+    // those), the last substep's marks cleared.
+    s.was_held.resize(s.surface.num_vertices(), false);
+    for &i in &s.marked {
+        if let Some(w) = s.was_held.get_mut(i as usize) {
+            *w = false;
+        }
+    }
+    s.held_list.retain(|&i| s.surface.is_held(i));
+    for &i in &s.held_list {
+        s.was_held[i as usize] = true;
+    }
+    s.marked.clone_from(&s.held_list);
     s.surface.release_all();
     // A tool moves only the vertices it holds, which later tools skip: one read of the
     // positions serves every tool.
     s.surface.positions_into(&mut s.scratch);
+    s.search.refresh(&mut s.surface, &s.scratch, &s.before);
     let mut out = Vec::with_capacity(tools.len());
-    for t in tools {
+    let mut now_held = Vec::new();
+    s.search.clear_tools();
+    for (k, t) in tools.iter().enumerate() {
+        // Where the tool's sharp features may press in this substep.
+        let parts = t
+            .shape
+            .parts
+            .iter()
+            .map(|(local, mesh)| {
+                part_query(mesh, &(inv * t.start * *local), &(inv * t.end * *local))
+            })
+            .reduce(|a, b| a.merged(&b));
         let Some(tool) = world.colliders.get(t.handle) else {
+            if let Some(parts) = parts {
+                s.search.near(k, &parts);
+            }
             continue;
         };
         // Vertices follow a tool whose motion is prescribed (kinematic or no body); a dynamic
@@ -91,18 +115,28 @@ pub(super) fn surface_substep(
             .get(&t.handle)
             .copied()
             .unwrap_or(t.friction);
+        let shape = t.shape.query.as_deref().unwrap_or(tool.shape());
+        let pose = inv * t.end;
+        // Candidates, from one walk of the BVH: the vertices near the tool, those held
+        // through the step (which may chase it from farther), and the triangles its sharp
+        // features may press.
+        let aabb = shape.compute_aabb(&pose);
+        let near = aabb.loosened(contact_margin(&aabb, 1e-4));
+        s.search.near(k, &parts.map_or(near, |p| p.merged(&near)));
+        merge_sorted(&mut s.search.vertices, &s.held_list);
         let holds = hold_vertices(
             (t.handle, friction, t.grasp, &mut s.sticks),
             follow,
             &mut s.surface,
-            t.shape.query.as_deref().unwrap_or(tool.shape()),
-            &(inv * t.end),
+            shape,
+            &pose,
             &(inv * t.start),
             h,
             &s.before,
             &s.was_held,
-            &s.scratch,
+            (&s.scratch, &s.search.vertices),
         );
+        now_held.extend_from_slice(&holds.vertices);
         let (pf, pm, pn) = reaction_of(&s.last_pressed, t.handle, h);
         let (force, arm_sum) = (holds.force + pf, holds.moment + pm);
         let world_force = body_pose.rotation * force;
@@ -127,29 +161,28 @@ pub(super) fn surface_substep(
         ));
     }
     // Sharp features, against the surface as the vertex holds left it, pressed together.
+    now_held.sort_unstable();
+    now_held.dedup();
+    s.held_list = now_held;
     if tools.iter().any(|t| !t.shape.parts.is_empty()) {
         s.surface.positions_into(&mut s.scratch);
+        // The holds moved the vertices they hold: the triangles around those that went
+        // past the BVH's slack join the candidates.
+        s.search.refresh(&mut s.surface, &s.scratch, &s.before);
+        s.search.add_moved_triangles();
         s.contacts.clear();
-        // Every triangle's bounds over the substep, once for all the tools.
-        SurfaceSnapshot {
-            before: &s.before,
-            now: &s.scratch,
-            triangles: s.surface.triangles(),
-        }
-        .triangle_bounds(&mut s.triangle_bounds);
-        let (mut velocities, mut owners) = (Vec::new(), Vec::new());
-        for t in tools {
+        let (mut velocities, mut owners, mut kept) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, t) in tools.iter().enumerate() {
             for (local, mesh) in &t.shape.parts {
                 find_contacts(
                     s.surface.triangles(),
-                    &s.triangle_bounds,
+                    (s.search.triangles_of_tool(k), &mut kept),
                     mesh,
                     &(inv * t.start * *local),
                     &(inv * t.end * *local),
                     h,
                     &s.before,
                     &s.scratch,
-                    &mut s.candidates,
                     &mut s.contacts,
                     &mut velocities,
                 );
@@ -176,6 +209,7 @@ pub(super) fn surface_substep(
 /// whose boundary at the start of the substep the vertex lies on.
 fn retarget_holds(
     surface: &mut MassSpringSurface,
+    held: &[u32],
     world: &PhysicsWorld,
     tools: &[ToolMotion],
     inv: &Pose,
@@ -207,7 +241,7 @@ fn retarget_holds(
     if poses.is_empty() {
         return;
     }
-    for i in 0..surface.num_vertices() as u32 {
+    for &i in held {
         if !surface.is_held(i) {
             continue;
         }
@@ -231,6 +265,16 @@ fn retarget_holds(
     }
 }
 
+/// Merges the sorted, duplicate-free `extra` into the sorted, duplicate-free `list`.
+fn merge_sorted(list: &mut Vec<u32>, extra: &[u32]) {
+    if extra.is_empty() {
+        return;
+    }
+    list.extend_from_slice(extra);
+    list.sort_unstable();
+    list.dedup();
+}
+
 pub(super) fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
     Pose::from_parts(
         a.translation.lerp(b.translation, t),
@@ -245,6 +289,8 @@ pub(super) struct Holds {
     pub moment: Vector,
     pub count: usize,
     pub sticking: usize,
+    /// The vertices held at the end.
+    pub vertices: Vec<u32>,
 }
 
 /// Moves every surface vertex the tool contains out of it and holds it there (see [`Holds`]).
@@ -268,7 +314,7 @@ pub(super) fn hold_vertices(
     h: Real,
     prev_positions: &[Vector],
     was_held: &[bool],
-    positions: &[Vector],
+    (positions, candidates): (&[Vector], &[u32]),
 ) -> Holds {
     let aabb: Aabb = shape.compute_aabb(pose);
     let margin = contact_margin(&aabb, 1e-4);
@@ -290,8 +336,11 @@ pub(super) fn hold_vertices(
     let mut held: Vec<(u32, Vector, Vector, bool)> = Vec::new();
     // (vertex, its free position and velocity) for vertices that followed the tool.
     let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
-    for (i, p) in positions.iter().enumerate() {
-        let iu = i as u32;
+    for &iu in candidates {
+        let i = iu as usize;
+        let Some(p) = positions.get(i) else {
+            continue;
+        };
         let entering = !was_held.get(i).copied().unwrap_or(false);
         let chase = follow && !entering;
         let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
@@ -363,6 +412,7 @@ pub(super) fn hold_vertices(
         moment: Vector::ZERO,
         count: 0,
         sticking: 0,
+        vertices: Vec::new(),
     };
     // A vertex moving over the tool slower than this (a millionth of the tool's size per
     // substep) is at rest on it.
@@ -412,6 +462,7 @@ pub(super) fn hold_vertices(
         out.force += on_tool;
         out.moment += surface.position(i).cross(on_tool);
         out.count += 1;
+        out.vertices.push(i);
     }
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));

@@ -7,6 +7,7 @@ mod friction;
 mod haptic_links;
 mod holding;
 mod pressing;
+mod search;
 mod surface_set;
 mod tool_shape;
 

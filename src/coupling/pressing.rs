@@ -7,9 +7,7 @@
 //! velocity change and the next surface step's constraint impulse.
 
 use super::tool_shape::contact_margin;
-use crate::geometry::{
-    tool_surface_contacts, triangles_in, SurfaceContact, SurfaceSnapshot, TouchMesh,
-};
+use crate::geometry::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, PointPress};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -60,21 +58,29 @@ pub(super) fn reaction_of(
     (force, moment, count)
 }
 
+/// Where the surface may meet `mesh` moving from `start` to `end` (surface frame): its swept
+/// bounds and a margin.
+pub(super) fn part_query(mesh: &TouchMesh, start: &Pose, end: &Pose) -> Aabb {
+    let local = mesh.local_aabb();
+    let swept: Aabb = local.transform_by(start).merged(&local.transform_by(end));
+    swept.loosened(2.0 * contact_margin(&swept, 1e-4))
+}
+
 /// Finds the contacts of `mesh` (moving from `start` to `end`, surface frame) with the surface
-/// (`before`: positions at the start of the substep, `now`: at its end; `bounds`: its
-/// triangles' bounds over the substep, [`SurfaceSnapshot::triangle_bounds`]) and appends them
-/// to `contacts`, with the tool's velocity along each contact's normal in `velocities`.
+/// (`before`: positions at the start of the substep, `now`: at its end; `candidates`: a
+/// superset of the triangles whose bounds over the substep meet [`part_query`], sorted; `kept`:
+/// scratch) and appends them to `contacts`, with the tool's velocity along each contact's
+/// normal in `velocities`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn find_contacts(
     triangles: &[[u32; 3]],
-    bounds: &[Aabb],
+    (candidates, kept): (&[u32], &mut Vec<u32>),
     mesh: &TouchMesh,
     start: &Pose,
     end: &Pose,
     h: Real,
     before: &[Vector],
     now: &[Vector],
-    candidates: &mut Vec<u32>,
     contacts: &mut Vec<SurfaceContact>,
     velocities: &mut Vec<Real>,
 ) {
@@ -86,7 +92,15 @@ pub(super) fn find_contacts(
         now,
         triangles,
     };
-    triangles_in(bounds, &swept.loosened(2.0 * margin), candidates);
+    // Keep the triangles whose own bounds over the substep meet the tool's.
+    let query = part_query(mesh, start, end);
+    kept.clear();
+    kept.extend(candidates.iter().copied().filter(|&t| {
+        snapshot
+            .swept_bounds(t)
+            .is_some_and(|b| b.intersects(&query))
+    }));
+    let candidates = &kept[..];
     if candidates.is_empty() {
         return;
     }

@@ -5,11 +5,11 @@ use super::friction::{Friction, Sticks};
 use super::haptic_links::LinkState;
 use super::holding::{attached_with_pose, lerp_pose, surface_substep, ToolMotion};
 use super::pressing::Pressed;
+use super::search::ContactSearch;
 use super::tool_shape::ToolShape;
 use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
-use parry3d::bounding_volume::Aabb;
 use parry3d::shape::{SharedShape, TriMeshFlags};
 use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderBuilder, ColliderHandle, ColliderSet, Group, InteractionGroups};
@@ -149,13 +149,17 @@ pub struct AttachedSurface {
     substeps: u32,
     pub(super) scratch: Vec<Vector>,
     pub(super) before: Vec<Vector>,
+    /// Which vertices were held at the start of the substep (`true` only at `held_list`).
     pub(super) was_held: Vec<bool>,
+    /// The vertices the tools held at the end of the last substep.
+    pub(super) held_list: Vec<u32>,
+    /// The vertices marked in `was_held`.
+    pub(super) marked: Vec<u32>,
     /// Points the tools pressed in the current and the last substep.
     pub(super) pressed: Vec<Pressed>,
     pub(super) last_pressed: Vec<Pressed>,
-    pub(super) candidates: Vec<u32>,
-    /// Every triangle's bounds over the substep (sharp tools' candidates).
-    pub(super) triangle_bounds: Vec<Aabb>,
+    /// Where the tools may touch the surface.
+    pub(super) search: ContactSearch,
     pub(super) contacts: Vec<SurfaceContact>,
     /// Vertices stuck to a tool (friction).
     pub(super) sticks: Sticks,
@@ -388,10 +392,11 @@ impl SurfaceSet {
             substeps: options.substeps,
             before: verts.clone(),
             was_held: Vec::new(),
+            held_list: Vec::new(),
+            marked: Vec::new(),
             pressed: Vec::new(),
             last_pressed: Vec::new(),
-            candidates: Vec::new(),
-            triangle_bounds: Vec::new(),
+            search: ContactSearch::default(),
             sticks: Sticks::default(),
             pair_friction: HashMap::default(),
             contacts: Vec::new(),

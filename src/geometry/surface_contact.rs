@@ -84,8 +84,8 @@ impl SurfaceSnapshot<'_> {
     }
 
     /// The triangles whose bounds over the substep (start and end) meet `aabb`: the candidates
-    /// for [`tool_surface_contacts`]. A linear scan (a BVH refit per substep costs as much);
-    /// with several tools, [`Self::triangle_bounds`] once and [`triangles_in`] per tool.
+    /// for [`tool_surface_contacts`]. A linear scan; a surface stepped over and over keeps a
+    /// [`super::SurfaceBvh`] instead, whose cost does not grow with the mesh.
     pub fn triangles_near(&self, aabb: &Aabb, out: &mut Vec<u32>) {
         let mut bounds = Vec::new();
         self.triangle_bounds(&mut bounds);
@@ -96,19 +96,29 @@ impl SurfaceSnapshot<'_> {
     /// `out` (cleared first).
     pub fn triangle_bounds(&self, out: &mut Vec<Aabb>) {
         out.clear();
-        out.extend(self.triangles.iter().map(|idx| {
-            let mut lo = Vector::splat(Real::MAX);
-            let mut hi = Vector::splat(Real::MIN);
-            for &v in idx {
-                for pos in [self.before, self.now] {
-                    if let Some(p) = pos.get(v as usize) {
-                        lo = lo.min(*p);
-                        hi = hi.max(*p);
-                    }
+        out.extend(self.triangles.iter().map(|idx| self.bounds_of(idx)));
+    }
+
+    /// Triangle `t`'s bounds over the substep (its vertices at the start and at the end);
+    /// `None` for a triangle out of range.
+    pub fn swept_bounds(&self, t: u32) -> Option<Aabb> {
+        self.triangles
+            .get(t as usize)
+            .map(|idx| self.bounds_of(idx))
+    }
+
+    fn bounds_of(&self, idx: &[u32; 3]) -> Aabb {
+        let mut lo = Vector::splat(Real::MAX);
+        let mut hi = Vector::splat(Real::MIN);
+        for &v in idx {
+            for pos in [self.before, self.now] {
+                if let Some(p) = pos.get(v as usize) {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
                 }
             }
-            Aabb::new(lo, hi)
-        }));
+        }
+        Aabb::new(lo, hi)
     }
 }
 

@@ -15,11 +15,14 @@ mod builder;
 mod changes;
 mod constraints;
 mod dynamics;
+mod motion_watch;
 use baraff_witkin::CgScratch;
 use builder::check_spring;
 pub use builder::MassSpringSurfaceBuilder;
 pub use constraints::PointPress;
 use constraints::{constrain, ActiveMemory, PointHold};
+pub use motion_watch::Escaped;
+use motion_watch::MotionWatch;
 
 /// Why a surface could not be built or changed. Each variant says how to fix the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -298,6 +301,8 @@ pub struct MassSpringSurface {
     point_holds: Vec<PointHold>,
     /// Which constraint rows pushed in the last filtered step's solve (its warm start).
     pushing: ActiveMemory,
+    /// Which vertices moved far ([`Self::watch_motion`]); `None` until watched.
+    watch: Option<Box<MotionWatch>>,
 }
 
 const NOT_FREE: u32 = u32::MAX;
@@ -341,6 +346,9 @@ impl MassSpringSurface {
             if *p {
                 self.pos[i] = self.home[i];
                 self.vel[i] = DVec3::ZERO;
+                if let Some(w) = self.watch.as_mut() {
+                    w.lose();
+                }
             }
         }
     }

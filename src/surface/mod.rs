@@ -13,6 +13,6 @@ pub mod meshing;
 
 pub use filter::{FilterError, FilterKind};
 pub use mass_spring_surface::{
-    ForceProfile, Integrator, MassDistribution, MassSpringSurface, MassSpringSurfaceBuilder,
-    PointPress, SpringModel, SurfaceError, DEFAULT_AREA_DENSITY,
+    Escaped, ForceProfile, Integrator, MassDistribution, MassSpringSurface,
+    MassSpringSurfaceBuilder, PointPress, SpringModel, SurfaceError, DEFAULT_AREA_DENSITY,
 };

@@ -24,4 +24,5 @@ mod sharp_tools;
 mod spinning_drop;
 mod stress_scenes;
 mod surface;
+mod surface_bvh;
 mod tool_shapes;

@@ -1,7 +1,7 @@
 //! The Baraff-Witkin integrator: implicit Euler with the exact spring Jacobian, solved by
 //! conjugate gradients with the held directions filtered out (Baraff and Witkin 1998, §5.3).
 
-use super::{MassSpringSurface, SpringModel, NOT_FREE};
+use super::{motion_watch, MassSpringSurface, SpringModel, NOT_FREE};
 use glamx::{DMat3, DVec3};
 
 /// The CG's work arrays, kept between steps.
@@ -114,6 +114,7 @@ impl MassSpringSurface {
             self.vel[i] += dv;
             self.pos[i] += self.vel[i] * dt;
             probe += self.pos[i].element_sum();
+            motion_watch::note(&mut self.watch, i, self.pos[i]);
         }
         self.check_probe(probe);
         // x stays as the next warm start.

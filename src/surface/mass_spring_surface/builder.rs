@@ -316,6 +316,7 @@ impl MassSpringSurfaceBuilder {
             any_held: false,
             point_holds: Vec::new(),
             pushing: ActiveMemory::default(),
+            watch: None,
         };
         s.build_vertex_edges();
         s.rebuild_free();

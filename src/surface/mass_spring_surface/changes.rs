@@ -102,6 +102,7 @@ impl MassSpringSurface {
         }
         if !self.pinned[i as usize] {
             self.pos[i as usize] = p.as_dvec3();
+            motion_watch::note(&mut self.watch, i as usize, self.pos[i as usize]);
             self.vel[i as usize] = v.as_dvec3();
         }
         Ok(())

@@ -5,7 +5,7 @@
 //! surface responds to them as to moving pins.
 
 use super::active_set::solve_pushing;
-use super::{MassSpringSurface, SurfaceError, NOT_FREE};
+use super::{motion_watch, MassSpringSurface, SurfaceError, NOT_FREE};
 use crate::math::{Real, Vector};
 use crate::surface::filter::Filter;
 use glamx::DVec3;
@@ -253,6 +253,7 @@ impl MassSpringSurface {
             for (v, w) in hold.entries() {
                 let share = w * inv_mass(self, v);
                 self.pos[v as usize] += hold.normal * (share * mu[i]);
+                motion_watch::note(&mut self.watch, v as usize, self.pos[v as usize]);
                 self.vel[v as usize] += hold.normal * (share * nu[r]);
             }
         }

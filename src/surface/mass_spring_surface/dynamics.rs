@@ -208,6 +208,7 @@ impl MassSpringSurface {
                     self.vel[i] += self.force[i] * (dt / self.mass[i]);
                     self.pos[i] += self.vel[i] * dt;
                     probe += self.pos[i].element_sum();
+                    motion_watch::note(&mut self.watch, i, self.pos[i]);
                 }
                 self.check_probe(probe);
             }
@@ -283,6 +284,7 @@ impl MassSpringSurface {
             self.vel[i] += dv;
             self.pos[i] += self.vel[i] * dt;
             probe += self.pos[i].element_sum();
+            motion_watch::note(&mut self.watch, i, self.pos[i]);
         }
         self.check_probe(probe);
     }

@@ -1,0 +1,96 @@
+//! The contact search's BVH against brute force: a real surface stepping under gravity, pushed
+//! about by teleports and re-pinned, at scales from 0.1 mm to 10 km; after every substep each
+//! triangle whose bounds over the substep meet a query box, and each vertex inside it, must be
+//! among the BVH's candidates.
+
+use proptest::prelude::*;
+use rapier_touch::geometry::{SurfaceBvh, SurfaceSnapshot};
+use rapier_touch::parry3d::bounding_volume::{Aabb, BoundingVolume};
+use rapier_touch::prelude::*;
+use rapier_touch::surface::meshing::{plate, plate_rim};
+use rapier_touch::surface::Escaped;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+    #[test]
+    fn the_bvh_never_misses_what_a_scan_finds(
+        scale_exp in -4.0f32..4.0,
+        cells in 3u32..14,
+        stiffness in 1.0f32..1000.0,
+        slack_frac in 0.01f32..1.0,
+        seed in any::<u64>(),
+    ) {
+        let size = 10f32.powf(scale_exp);
+        let mesh = plate(size, size, cells, cells);
+        let mut surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
+            .stiffness(stiffness)
+            .damping(0.05 * stiffness)
+            .pinned(plate_rim(cells, cells))
+            .gravity(Vector::new(0.0, -9.81 * size, 0.0))
+            .dt(1.0 / 240.0)
+            .build()
+            .unwrap();
+        let edge = size / cells as f32;
+        let slack = slack_frac * edge;
+        let mut before = Vec::new();
+        let mut now = Vec::new();
+        surface.positions_into(&mut now);
+        let mut bvh = SurfaceBvh::new(&now, surface.triangles(), slack);
+        surface.watch_motion(slack);
+        let mut rng = seed;
+        let mut next = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f32 / (1u64 << 53) as f32
+        };
+        let n = now.len() as u32;
+        let (mut moved, mut tris, mut verts) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..60 {
+            surface.positions_into(&mut before);
+            surface.step();
+            // Tools teleport a few vertices by up to two edges.
+            for _ in 0..(next() * 4.0) as u32 {
+                let v = (next() * n as f32) as u32 % n;
+                let p = surface.position(v)
+                    + Vector::new(next() - 0.5, next() - 0.5, next() - 0.5) * (4.0 * edge);
+                surface.set_state(v, p, Vector::ZERO).unwrap();
+            }
+            // Now and then a pin comes or goes (pinned vertices jump home).
+            if next() < 0.05 {
+                let v = (next() * n as f32) as u32 % n;
+                let pinned = surface.is_pinned(v);
+                surface.set_pinned(v, !pinned).unwrap();
+            }
+            surface.positions_into(&mut now);
+            match surface.take_escaped(&mut moved) {
+                Escaped::Listed => bvh.update(&moved, &now, &before),
+                Escaped::All => bvh.rebuild(&now, Some(&before)),
+            }
+            let snapshot = SurfaceSnapshot {
+                before: &before,
+                now: &now,
+                triangles: surface.triangles(),
+            };
+            for _ in 0..8 {
+                let centre = Vector::new(next() * size, (next() - 0.7) * size, next() * size);
+                let half = Vector::new(next(), next(), next()) * (0.3 * size);
+                let query = Aabb::new(centre - half, centre + half);
+                bvh.triangles_in(&query, &mut tris);
+                for t in 0..surface.triangles().len() as u32 {
+                    let hits = snapshot.swept_bounds(t).unwrap().intersects(&query);
+                    prop_assert!(!hits || tris.binary_search(&t).is_ok(), "triangle {t} missed");
+                }
+                bvh.vertices_in(&query, &mut verts);
+                verts.sort_unstable();
+                for (v, p) in now.iter().enumerate() {
+                    let inside = query.contains_local_point(*p);
+                    prop_assert!(
+                        !inside || verts.binary_search(&(v as u32)).is_ok(),
+                        "vertex {v} missed"
+                    );
+                }
+            }
+        }
+    }
+}
