@@ -21,8 +21,9 @@
 //! in a 1 kHz world, 1 substep, neighbour filter. The set-up prints each scene's filter. Targets (one core): 790 nodes and 6 tools ≤ 300 µs per full
 //! step, the haptic path ≤ 50 µs, 10,000 nodes with 2 tools ≤ 1 ms.
 //!
-//! `100kn_6cubes_1khz`: the contact search alone on a 100,000-node plate pressed by the six
-//! cubes (`bench_search_100k`), against the linear scans it replaced, and the full step there.
+//! `100kn_6cubes_1khz` and `10kn_6cubes_1khz`: the contact search alone on a 100,000- and a
+//! 10,000-node plate of the 784-node plate's spacing pressed by the six cubes
+//! (`bench_search_100k`), against the linear scans it replaced, and the full step there.
 //!
 //! Run with `cargo bench --bench coupled_step`.
 
@@ -246,27 +247,37 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// The contact search per surface substep on a 100,000-node plate (316 x 316 cells of 11 mm,
-/// the 784-node plate's mesh spacing over 3.5 m) pressed by the six 4 cm cubes of the
-/// `784n_6cubes` scene, near its middle, in a 1 kHz world: what the coupling does to find the
-/// contacts, timed alone while the real coupled step runs (untimed) between samples.
+/// The contact search per surface substep on plates of 100,000 and 10,000 nodes (316 and 99
+/// cells of 11 mm a side: the 784-node plate's mesh spacing over 3.5 m and 1.1 m) pressed by
+/// the six 4 cm cubes of the `784n_6cubes` scene, near the middle, in a 1 kHz world: what the
+/// coupling does to find the contacts, timed alone while the real coupled step runs (untimed)
+/// between samples.
 ///
 /// - `search_bvh`: the crate's search: the [`SurfaceBvh`] brought up to date with the vertices
 ///   that moved farther than its slack (found here by a scan, untimed; the surface notes them
-///   as its integrator moves them), then per cube the vertices near it (each tested against
-///   the cube, as the vertex holds do) and the triangles its sweep may meet, filtered by their
-///   own bounds, and the cube's vertex-face and edge-edge contacts with them;
+///   as its integrator moves them), then per cube one walk (reused through a [`NearCache`]
+///   while the cube stays in the grown box it walked) for the vertices near it (each tested
+///   against the cube, as the vertex holds do) and the triangles its sweep may meet, filtered
+///   by their own bounds, and the cube's vertex-face and edge-edge contacts with them;
 /// - `search_scan`: the same contacts from linear scans (every vertex against each cube's box,
-///   every triangle's bounds once and against each cube's sweep): what the coupling did before.
+///   every triangle's bounds once and against each cube's sweep): what the coupling did before;
+/// - `candidates_bvh`: `search_bvh` without the tests against the cube: the candidates alone.
 fn bench_search_100k(c: &mut Criterion) {
+    // The same search on a 10,000-node plate of the same spacing: what does not grow with
+    // the mesh takes the same time there.
+    for (label, side) in [("10kn", 99u32), ("100kn", 316)] {
+        bench_search(c, label, side);
+    }
+}
+
+fn bench_search(c: &mut Criterion, label: &str, side: u32) {
     use rapier_touch::geometry::{
-        tool_surface_contacts, triangles_in, SurfaceBvh, SurfaceSnapshot,
+        tool_surface_contacts, triangles_in, NearCache, SurfaceBvh, SurfaceSnapshot,
     };
     use rapier_touch::parry3d::bounding_volume::BoundingVolume;
     use rapier_touch::parry3d::query::PointQuery;
     use std::time::Instant;
 
-    let side = 316;
     let dt = 1.0 / 1000.0;
     let mut s = scene_sized(SIZE * side as f32 / 27.0, side, 6, 1, dt, true, false);
     let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(R))).unwrap();
@@ -289,6 +300,7 @@ fn bench_search_100k(c: &mut Criterion) {
     let (mut moved, mut verts, mut tris, mut contacts) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut bounds = Vec::new();
+    let mut caches = vec![NearCache::default(); 6];
     let (mut candidates_seen, mut moved_seen, mut contacts_seen, mut samples) = (0, 0, 0, 0);
     let mut g = c.benchmark_group("coupled_step");
     g.sample_size(20)
@@ -299,7 +311,7 @@ fn bench_search_100k(c: &mut Criterion) {
         ("search_scan", true, true),
         ("candidates_bvh", false, false),
     ] {
-        g.bench_function(format!("100kn_6cubes_1khz/{name}"), |b| {
+        g.bench_function(format!("{label}_6cubes_1khz/{name}"), |b| {
             b.iter_custom(|iters| {
                 let mut total = Duration::ZERO;
                 for _ in 0..iters {
@@ -333,7 +345,7 @@ fn bench_search_100k(c: &mut Criterion) {
                     } else {
                         snapshot.triangle_bounds(&mut bounds);
                     }
-                    for (from, to) in &poses {
+                    for (k, (from, to)) in poses.iter().enumerate() {
                         let aabb = cube.local_aabb().transform_by(to);
                         let box_ = aabb.loosened(1e-4 * edge);
                         let swept = aabb.merged(&cube.local_aabb().transform_by(from));
@@ -346,8 +358,11 @@ fn bench_search_100k(c: &mut Criterion) {
                             );
                             triangles_in(&bounds, &query, &mut tris);
                         } else {
-                            // One walk of the tree for both, as the coupling does.
-                            bvh.near(&query.merged(&box_), &mut tris, &mut verts);
+                            // One walk of the tree for both, reused while the cube stays
+                            // inside the grown box it walked, as the coupling does.
+                            let q = query.merged(&box_);
+                            let grow = 0.2 * q.extents().max_element();
+                            bvh.near_cached(&mut caches[k], &q, grow, &mut tris, &mut verts);
                             tris.retain(|&t| {
                                 snapshot
                                     .swept_bounds(t)
@@ -393,7 +408,9 @@ fn bench_search_100k(c: &mut Criterion) {
         );
         (candidates_seen, moved_seen, contacts_seen, samples) = (0, 0, 0, 0);
     }
-    g.bench_function("100kn_6cubes_1khz/full", |b| b.iter(|| s.full_step()));
+    g.bench_function(format!("{label}_6cubes_1khz/full"), |b| {
+        b.iter(|| s.full_step())
+    });
     g.finish();
 }
 

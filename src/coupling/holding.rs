@@ -88,6 +88,8 @@ pub(super) fn surface_substep(
     let mut out = Vec::with_capacity(tools.len());
     let mut now_held = Vec::new();
     s.search.clear_tools();
+    s.search
+        .retain_tools(|h| tools.iter().any(|t| t.handle == h));
     for (k, t) in tools.iter().enumerate() {
         // Where the tool's sharp features may press in this substep.
         let parts = t
@@ -100,7 +102,7 @@ pub(super) fn surface_substep(
             .reduce(|a, b| a.merged(&b));
         let Some(tool) = world.colliders.get(t.handle) else {
             if let Some(parts) = parts {
-                s.search.near(k, &parts);
+                s.search.near(k, t.handle, &parts);
             }
             continue;
         };
@@ -122,7 +124,8 @@ pub(super) fn surface_substep(
         // features may press.
         let aabb = shape.compute_aabb(&pose);
         let near = aabb.loosened(contact_margin(&aabb, 1e-4));
-        s.search.near(k, &parts.map_or(near, |p| p.merged(&near)));
+        s.search
+            .near(k, t.handle, &parts.map_or(near, |p| p.merged(&near)));
         merge_sorted(&mut s.search.vertices, &s.held_list);
         let holds = hold_vertices(
             (t.handle, friction, t.grasp, &mut s.sticks),

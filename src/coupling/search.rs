@@ -3,14 +3,17 @@
 //! moved farther than the BVH's slack ([`MassSpringSurface::take_escaped`]). The vertex holds
 //! and the sharp features' presses both take their candidates from it.
 
-use crate::geometry::SurfaceBvh;
+use crate::geometry::{NearCache, SurfaceBvh};
 use crate::math::{Real, Vector};
 use crate::surface::{Escaped, MassSpringSurface};
 use parry3d::bounding_volume::Aabb;
+use rapier3d::geometry::ColliderHandle;
 
 /// The leaves' slack as a fraction of the surface's mean edge length: a vertex is re-bounded
 /// once it moved a quarter of an edge.
 const SLACK_PER_EDGE: Real = 0.25;
+/// A tool's walk of the BVH covers its box grown by this fraction of its size on every side.
+const GROW: Real = 0.2;
 
 /// A surface's contact search state (module docs).
 #[derive(Clone, Debug, Default)]
@@ -21,6 +24,8 @@ pub(super) struct ContactSearch {
     pub vertices: Vec<u32>,
     /// Each tool's candidate triangles, by its index in the substep.
     tools: Vec<Vec<u32>>,
+    /// Each tool's last walk of the BVH.
+    caches: Vec<(ColliderHandle, NearCache)>,
 }
 
 impl ContactSearch {
@@ -46,22 +51,35 @@ impl ContactSearch {
         bvh.update(&self.escaped, now, before);
     }
 
-    /// The vertices and the triangles that may lie in `aabb` (one walk of the BVH), for tool
-    /// `k` of the substep: the vertices into `self.vertices` in increasing order, the
-    /// triangles kept as the tool's ([`Self::triangles_of_tool`]).
-    pub fn near(&mut self, k: usize, aabb: &Aabb) {
+    /// The vertices and the triangles that may lie in `aabb`, for tool `k` of the substep
+    /// (collider `tool`): the vertices into `self.vertices` in increasing order, the
+    /// triangles kept as the tool's ([`Self::triangles_of_tool`]). The BVH is walked with the
+    /// box grown by a fifth of its size and the answer reused while the tool stays inside
+    /// that ([`SurfaceBvh::near_cached`]).
+    pub fn near(&mut self, k: usize, tool: ColliderHandle, aabb: &Aabb) {
         if self.tools.len() <= k {
             self.tools.resize_with(k + 1, Vec::new);
         }
         let triangles = &mut self.tools[k];
-        match self.bvh.as_mut() {
-            Some(bvh) => bvh.near(aabb, triangles, &mut self.vertices),
+        let Some(bvh) = self.bvh.as_mut() else {
+            triangles.clear();
+            self.vertices.clear();
+            return;
+        };
+        let cache = match self.caches.iter().position(|c| c.0 == tool) {
+            Some(i) => &mut self.caches[i].1,
             None => {
-                triangles.clear();
-                self.vertices.clear();
+                self.caches.push((tool, NearCache::default()));
+                &mut self.caches.last_mut().expect("just pushed").1
             }
-        }
-        self.vertices.sort_unstable();
+        };
+        let grow = GROW * aabb.extents().max_element();
+        bvh.near_cached(cache, aabb, grow, triangles, &mut self.vertices);
+    }
+
+    /// Forgets the caches of tools not in `tools`.
+    pub fn retain_tools(&mut self, tools: impl Fn(ColliderHandle) -> bool) {
+        self.caches.retain(|c| tools(c.0));
     }
 
     /// Forgets the tools' triangles (a tool with no [`Self::near`] in this substep has none).

@@ -7,31 +7,31 @@
 //! farther ([`crate::surface::MassSpringSurface::take_escaped`], noted as its integrator moves
 //! them); only the leaves around those are recomputed, and parry's BVH refits only their paths
 //! to the root ([`Bvh::refit_partial`]). A query then costs the tree's depth and the candidates
-//! it returns, not the mesh: at 100,000 nodes and six cubes, 52-59 µs per substep for every
-//! cube's candidates where the scans over every vertex and every triangle's bounds took 2.9 ms
-//! (`cargo bench --bench coupled_step -- 100kn`).
+//! it returns, not the mesh. A tool asks about much the same place substep after substep:
+//! [`SurfaceBvh::near_cached`] walks a grown box once and then only looks at the leaves changed
+//! since. At 100,000 nodes and six cubes, 38-49 µs per substep for every cube's candidates
+//! (36 µs at 10,000 nodes) where the scans over every vertex and every triangle's bounds took
+//! 3.2 ms (`cargo bench --bench coupled_step -- 6cubes_1khz`).
 
 use crate::math::{Real, Vector};
-use parry3d::bounding_volume::Aabb;
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
-/// Triangles per leaf. At 100,000 nodes and six cubes the candidates cost 52-59 µs per
-/// substep with a leaf per triangle, right after a surface step (24 µs with the tree still in
-/// cache); runs of eight triangles in Morton order, a tree eight times smaller, measured 62 µs:
-/// their larger candidate sets cost more than the smaller walk saved (`cargo bench --bench
-/// coupled_step -- 100kn`). Runs longer than one need the triangles in a spatial order first.
-const CLUSTER: usize = 1;
-
 /// A BVH over a surface's triangles with leaves fattened by a slack (module docs).
+///
+/// A leaf per triangle. Runs of eight triangles in Morton order per leaf (a tree eight times
+/// smaller, fewer cache misses on the walk right after a surface step) measured slower at
+/// 100,000 nodes and six cubes, 62 µs against 52-59 µs per substep for the candidates
+/// (`cargo bench --bench coupled_step -- 100kn`): their larger candidate sets cost more than
+/// the smaller walk saved.
 #[derive(Clone)]
 pub struct SurfaceBvh {
     bvh: Bvh,
-    /// The triangles: leaf `c < clusters` holds `CLUSTER` of them from `c * CLUSTER`.
+    /// The triangles kept (indices in range): leaf `l < triangles.len()` is `triangles[l]`.
     triangles: Vec<[u32; 3]>,
     /// The caller's index of each of `triangles`.
-    order: Vec<u32>,
-    clusters: usize,
-    /// Vertices in no triangle: leaf `clusters + k` is `lone[k]`.
+    ids: Vec<u32>,
+    /// Vertices in no triangle: leaf `triangles.len() + k` is `lone[k]`.
     lone: Vec<u32>,
     /// For each vertex, its leaves (CSR: `leaves[leaf_ptr[v]..leaf_ptr[v + 1]]`).
     leaf_ptr: Vec<u32>,
@@ -42,6 +42,26 @@ pub struct SurfaceBvh {
     marks: Vec<u32>,
     stamp: u32,
     changed: Vec<u32>,
+    /// Bumped by every rebuild: a [`NearCache`] from an older tree is walked again.
+    generation: u64,
+    /// The leaves changed since the log was last trimmed; `log[0]` is the `log_base`-th change.
+    log: Vec<u32>,
+    log_base: usize,
+}
+
+/// Leaves changed before a cache's walk are kept in the log for it up to this many; past
+/// that, a cached query walks the tree again.
+const LOG_MAX: usize = 4096;
+
+/// One caller's last walk of a [`SurfaceBvh`] ([`SurfaceBvh::near_cached`]): the box it
+/// walked and what it found, brought up to date with the leaves changed since.
+#[derive(Clone, Debug, Default)]
+pub struct NearCache {
+    generation: u64,
+    log_at: usize,
+    walked: Option<Aabb>,
+    triangles: Vec<u32>,
+    vertices: Vec<u32>,
 }
 
 impl std::fmt::Debug for SurfaceBvh {
@@ -91,29 +111,21 @@ impl SurfaceBvh {
     /// ```
     pub fn new(positions: &[Vector], triangles: &[[u32; 3]], slack: Real) -> Self {
         let n = positions.len();
-        let triangles: Vec<[u32; 3]> = triangles
+        let (ids, triangles): (Vec<u32>, Vec<[u32; 3]>) = triangles
             .iter()
-            .filter(|t| t.iter().all(|&v| (v as usize) < n))
-            .copied()
-            .collect();
-        let order: Vec<u32> = (0..triangles.len() as u32).collect();
-        let clusters = triangles.len().div_ceil(CLUSTER);
-        let mut used = vec![false; n];
+            .enumerate()
+            .filter(|(_, t)| t.iter().all(|&v| (v as usize) < n))
+            .map(|(i, t)| (i as u32, *t))
+            .unzip();
         let mut count = vec![0u32; n + 1];
-        // Each vertex's leaves, each once: a cluster's triangles come together, so a repeat is
-        // the last one written.
-        let mut last = vec![u32::MAX; n];
-        for (i, t) in triangles.iter().enumerate() {
-            let c = (i / CLUSTER) as u32;
+        for t in &triangles {
             for v in dedup3(*t) {
-                used[v as usize] = true;
-                if last[v as usize] != c {
-                    last[v as usize] = c;
-                    count[v as usize + 1] += 1;
-                }
+                count[v as usize + 1] += 1;
             }
         }
-        let lone: Vec<u32> = (0..n as u32).filter(|&v| !used[v as usize]).collect();
+        let lone: Vec<u32> = (0..n as u32)
+            .filter(|&v| count[v as usize + 1] == 0)
+            .collect();
         for &v in &lone {
             count[v as usize + 1] = 1;
         }
@@ -122,25 +134,20 @@ impl SurfaceBvh {
         }
         let mut fill = count.clone();
         let mut leaves = vec![0u32; count[n] as usize];
-        last.iter_mut().for_each(|l| *l = u32::MAX);
-        for (i, t) in triangles.iter().enumerate() {
-            let c = (i / CLUSTER) as u32;
-            for v in dedup3(*t) {
-                if last[v as usize] != c {
-                    last[v as usize] = c;
-                    leaves[fill[v as usize] as usize] = c;
-                    fill[v as usize] += 1;
-                }
+        let lone_leaves = lone
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| (triangles.len() + k, [v; 3]));
+        for (leaf, t) in triangles.iter().copied().enumerate().chain(lone_leaves) {
+            for v in dedup3(t) {
+                leaves[fill[v as usize] as usize] = leaf as u32;
+                fill[v as usize] += 1;
             }
-        }
-        for (k, &v) in lone.iter().enumerate() {
-            leaves[fill[v as usize] as usize] = (clusters + k) as u32;
         }
         let mut out = Self {
             bvh: Bvh::new(),
             triangles,
-            order,
-            clusters,
+            ids,
             lone,
             leaf_ptr: count,
             leaves,
@@ -153,6 +160,9 @@ impl SurfaceBvh {
             marks: vec![0; n],
             stamp: 0,
             changed: Vec::new(),
+            generation: 0,
+            log: Vec::new(),
+            log_base: 0,
         };
         out.rebuild(positions, None);
         out
@@ -173,6 +183,9 @@ impl SurfaceBvh {
             .map(|l| self.leaf_box(l, before))
             .collect();
         self.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+        self.generation += 1;
+        self.log_base += self.log.len();
+        self.log.clear();
     }
 
     /// The vertices in `moved` are at `now` and were at `before` at the start of the substep
@@ -210,6 +223,63 @@ impl SurfaceBvh {
             self.bvh.insert_or_update_partially(b, leaf, 0.0);
         }
         self.bvh.refit_partial(&[], &self.changed);
+        if self.log.len() + self.changed.len() > LOG_MAX {
+            self.log_base += self.log.len();
+            self.log.clear();
+        }
+        self.log.extend_from_slice(&self.changed);
+    }
+
+    /// [`Self::near`] for a caller that asks about much the same place again and again (a
+    /// tool, substep after substep): the tree is walked with `aabb` grown by `grow` on every
+    /// side, and while later boxes stay inside that one, the answer is the walk's, plus the
+    /// leaves changed since that now meet the walked box (kept in `cache`). Triangles in
+    /// increasing order, vertices each once; a superset of [`Self::near`]'s.
+    pub fn near_cached(
+        &mut self,
+        cache: &mut NearCache,
+        aabb: &Aabb,
+        grow: Real,
+        triangles: &mut Vec<u32>,
+        vertices: &mut Vec<u32>,
+    ) {
+        let walked = cache.walked.filter(|w| {
+            cache.generation == self.generation && cache.log_at >= self.log_base && w.contains(aabb)
+        });
+        match walked {
+            Some(w) => {
+                // The leaves changed since: those that now meet the walked box join it.
+                let pending = &self.log[cache.log_at - self.log_base..];
+                let mut grew = false;
+                for &leaf in pending {
+                    let meets = self
+                        .bvh
+                        .leaf_node(leaf)
+                        .is_some_and(|n| n.aabb().intersects(&w));
+                    if meets {
+                        grew = true;
+                        cache.triangles.extend(self.id_of(leaf));
+                        cache.vertices.extend(self.leaf_vertices(leaf as usize));
+                    }
+                }
+                if grew {
+                    cache.triangles.sort_unstable();
+                    cache.triangles.dedup();
+                    cache.vertices.sort_unstable();
+                    cache.vertices.dedup();
+                }
+            }
+            None => {
+                let grown = aabb.loosened(grow.max(0.0));
+                self.near(&grown, &mut cache.triangles, &mut cache.vertices);
+                cache.vertices.sort_unstable();
+                cache.walked = Some(grown);
+                cache.generation = self.generation;
+            }
+        }
+        cache.log_at = self.log_base + self.log.len();
+        triangles.clone_from(&cache.triangles);
+        vertices.clone_from(&cache.vertices);
     }
 
     /// The triangles whose leaves meet `aabb`, in `out` (cleared first), in increasing order:
@@ -217,9 +287,7 @@ impl SurfaceBvh {
     /// some that do not.
     pub fn triangles_in(&self, aabb: &Aabb, out: &mut Vec<u32>) {
         out.clear();
-        for leaf in self.bvh.intersect_aabb(aabb) {
-            out.extend_from_slice(self.cluster_ids(leaf as usize));
-        }
+        out.extend(self.bvh.intersect_aabb(aabb).filter_map(|l| self.id_of(l)));
         out.sort_unstable();
     }
 
@@ -240,7 +308,7 @@ impl SurfaceBvh {
             self.marks.iter_mut().for_each(|m| *m = 0);
             self.stamp = 1;
         }
-        let marks = &mut self.marks;
+        let mut marks = std::mem::take(&mut self.marks);
         let stamp = self.stamp;
         let mut add = |v: u32| {
             if let Some(m) = marks.get_mut(v as usize) {
@@ -251,61 +319,49 @@ impl SurfaceBvh {
             }
         };
         for leaf in self.bvh.intersect_aabb(aabb) {
-            let l = leaf as usize;
-            if l >= self.clusters {
-                if let Some(&v) = self.lone.get(l - self.clusters) {
-                    add(v);
-                }
-                continue;
-            }
-            let range = l * CLUSTER..((l + 1) * CLUSTER).min(self.triangles.len());
-            triangles.extend_from_slice(&self.order[range.clone()]);
-            for t in &self.triangles[range] {
-                t.iter().for_each(|&v| add(v));
-            }
+            triangles.extend(self.id_of(leaf));
+            self.leaf_vertices(leaf as usize).for_each(&mut add);
         }
+        self.marks = marks;
         triangles.sort_unstable();
     }
 
-    /// Appends to `out` the triangles of the leaves around `vertices`: every triangle that
-    /// uses one of them, and their neighbours in the leaves.
+    /// Appends to `out` the triangles that use any of `vertices`.
     pub fn triangles_of(&self, vertices: &[u32], out: &mut Vec<u32>) {
         for &v in vertices {
             let v = v as usize;
             if v + 1 < self.leaf_ptr.len() {
                 let range = self.leaf_ptr[v] as usize..self.leaf_ptr[v + 1] as usize;
-                for &leaf in &self.leaves[range] {
-                    out.extend_from_slice(self.cluster_ids(leaf as usize));
-                }
+                out.extend(self.leaves[range].iter().filter_map(|&l| self.id_of(l)));
             }
         }
     }
 
-    /// The caller's indices of leaf `l`'s triangles (none for a lone vertex's leaf).
-    fn cluster_ids(&self, l: usize) -> &[u32] {
-        if l >= self.clusters {
-            return &[];
-        }
-        &self.order[l * CLUSTER..((l + 1) * CLUSTER).min(self.order.len())]
+    /// The caller's index of leaf `l`'s triangle (`None` for a lone vertex's leaf).
+    fn id_of(&self, l: u32) -> Option<u32> {
+        self.ids.get(l as usize).copied()
+    }
+
+    /// Leaf `l`'s vertices (a vertex may repeat).
+    fn leaf_vertices(&self, l: usize) -> impl Iterator<Item = u32> + '_ {
+        let nt = self.triangles.len();
+        let verts = match self.triangles.get(l) {
+            Some(t) => Some(*t),
+            None => self.lone.get(l - nt).map(|&v| [v; 3]),
+        };
+        verts.into_iter().flatten()
     }
 
     fn num_leaves(&self) -> usize {
-        self.clusters + self.lone.len()
+        self.triangles.len() + self.lone.len()
     }
 
     /// Leaf `l`'s box: its vertices' references fattened by the slack, and their positions in
     /// `before` if given.
     fn leaf_box(&self, l: usize, before: Option<&[Vector]>) -> Aabb {
-        let lone;
-        let tris: &[[u32; 3]] = if l < self.clusters {
-            &self.triangles[l * CLUSTER..((l + 1) * CLUSTER).min(self.triangles.len())]
-        } else {
-            lone = [[self.lone[l - self.clusters]; 3]];
-            &lone
-        };
         let mut lo = Vector::splat(Real::MAX);
         let mut hi = Vector::splat(Real::MIN);
-        for &v in tris.iter().flatten() {
+        for v in self.leaf_vertices(l) {
             let v = v as usize;
             let r = self.reference[v];
             lo = lo.min(r);
@@ -331,4 +387,47 @@ fn dedup3(t: [u32; 3]) -> impl Iterator<Item = u32> {
     ]
     .into_iter()
     .flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangles_keep_the_callers_indices_when_some_are_left_out() {
+        let v = [
+            Vector::new(0.0, 0.0, 0.0),
+            Vector::new(1.0, 0.0, 0.0),
+            Vector::new(0.0, 0.0, 1.0),
+            Vector::new(5.0, 0.0, 0.0),
+            Vector::new(6.0, 0.0, 0.0),
+            Vector::new(5.0, 0.0, 1.0),
+            Vector::new(9.0, 9.0, 9.0),
+        ];
+        // Triangle 1 names a vertex that does not exist; vertex 6 is in no triangle.
+        let mut bvh = SurfaceBvh::new(&v, &[[0, 2, 1], [0, 1, 99], [3, 5, 4]], 0.0);
+        let (mut tris, mut verts) = (Vec::new(), Vec::new());
+        let far = Aabb::new(Vector::new(4.9, -0.1, -0.1), Vector::new(6.1, 0.1, 1.1));
+        bvh.near(&far, &mut tris, &mut verts);
+        verts.sort();
+        assert_eq!(
+            (tris.as_slice(), verts.as_slice()),
+            (&[2][..], &[3, 4, 5][..])
+        );
+        let mut around = Vec::new();
+        bvh.triangles_of(&[4, 6], &mut around);
+        assert_eq!(around, [2]);
+        let lone = Aabb::new(Vector::splat(8.9), Vector::splat(9.1));
+        bvh.near(&lone, &mut tris, &mut verts);
+        assert_eq!((tris.len(), verts.as_slice()), (0, &[6][..]));
+        // Through a cache: the lone vertex moves next to the second triangle and is found.
+        let mut cache = NearCache::default();
+        bvh.near_cached(&mut cache, &far, 0.5, &mut tris, &mut verts);
+        assert_eq!(tris, [2]);
+        let mut moved = v;
+        moved[6] = Vector::new(5.5, 0.0, 0.5);
+        bvh.update(&[6], &moved, &v);
+        bvh.near_cached(&mut cache, &far, 0.5, &mut tris, &mut verts);
+        assert!(verts.contains(&6) && tris == [2]);
+    }
 }

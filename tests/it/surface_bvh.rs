@@ -1,10 +1,10 @@
 //! The contact search's BVH against brute force: a real surface stepping under gravity, pushed
 //! about by teleports and re-pinned, at scales from 0.1 mm to 10 km; after every substep each
 //! triangle whose bounds over the substep meet a query box, and each vertex inside it, must be
-//! among the BVH's candidates.
+//! among the BVH's candidates, asked afresh or through a cache a drifting tool keeps.
 
 use proptest::prelude::*;
-use rapier_touch::geometry::{SurfaceBvh, SurfaceSnapshot};
+use rapier_touch::geometry::{NearCache, SurfaceBvh, SurfaceSnapshot};
 use rapier_touch::parry3d::bounding_volume::{Aabb, BoundingVolume};
 use rapier_touch::prelude::*;
 use rapier_touch::surface::meshing::{plate, plate_rim};
@@ -46,6 +46,11 @@ proptest! {
         };
         let n = now.len() as u32;
         let (mut moved, mut tris, mut verts) = (Vec::new(), Vec::new(), Vec::new());
+        // A tool's box drifting over the plate, asked through a cache every substep.
+        let mut cache = NearCache::default();
+        let mut tool = Vector::new(next() * size, -0.1 * size, next() * size);
+        let drift = Vector::new(next() - 0.5, 0.1 * (next() - 0.5), next() - 0.5) * (0.02 * size);
+        let tool_half = Vector::splat(0.1 * size) * (0.2 + next());
         for _ in 0..60 {
             surface.positions_into(&mut before);
             surface.step();
@@ -72,6 +77,20 @@ proptest! {
                 now: &now,
                 triangles: surface.triangles(),
             };
+            tool += drift;
+            let query = Aabb::new(tool - tool_half, tool + tool_half);
+            bvh.near_cached(&mut cache, &query, 0.2 * tool_half.x, &mut tris, &mut verts);
+            for t in 0..surface.triangles().len() as u32 {
+                let hits = snapshot.swept_bounds(t).unwrap().intersects(&query);
+                prop_assert!(!hits || tris.binary_search(&t).is_ok(), "cached: triangle {t} missed");
+            }
+            for (v, p) in now.iter().enumerate() {
+                let inside = query.contains_local_point(*p);
+                prop_assert!(
+                    !inside || verts.binary_search(&(v as u32)).is_ok(),
+                    "cached: vertex {v} missed"
+                );
+            }
             for _ in 0..8 {
                 let centre = Vector::new(next() * size, (next() - 0.7) * size, next() * size);
                 let half = Vector::new(next(), next(), next()) * (0.3 * size);
