@@ -3,6 +3,7 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
+use super::boundary::{exit_along, nearest_on_boundary, outward_normal};
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{find_contacts, part_query, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
@@ -10,7 +11,6 @@ use super::tool_shape::{contact_margin, ToolShape};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::query::Ray;
 use rapier3d::geometry::ColliderHandle;
 use rapier3d::pipeline::PhysicsWorld;
 use std::sync::Arc;
@@ -470,133 +470,4 @@ pub(super) fn hold_vertices(
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));
     out
-}
-
-/// The outward normal of `shape` at `local`, a point on its boundary (shape frame).
-///
-/// A convex polyhedron gives the normal of its nearest face plane; a compound, its nearest
-/// part's normal; an oriented triangle mesh, its nearest feature's (pseudo-)normal. Any other shape: a short ray
-/// cast from just outside the point, back toward the shape's centre, hits the boundary next to
-/// the point and returns the exact normal there (parry's feature normals at a boundary point
-/// are unreliable for cylinders and cones, and missing for capsules and round shapes).
-/// Fallbacks: the feature normal, then the direction from the shape's centre.
-pub(super) fn outward_normal(
-    shape: &dyn parry3d::shape::Shape,
-    local: Vector,
-    margin: Real,
-) -> Vector {
-    if let Some((n, _)) = shape
-        .as_convex_polyhedron()
-        .and_then(|poly| closest_face(poly, local))
-    {
-        return n;
-    }
-    // A compound: the normal of the part whose boundary is nearest.
-    if let Some(compound) = shape.as_compound() {
-        let nearest = compound.shapes().iter().min_by(|a, b| {
-            let d = |(pose, part): &(Pose, parry3d::shape::SharedShape)| {
-                (part.project_point(pose, local, false).point - local).length()
-            };
-            d(a).total_cmp(&d(b))
-        });
-        if let Some((pose, part)) = nearest {
-            let inner = outward_normal(part.as_ref(), pose.inverse_transform_point(local), margin);
-            return pose.rotation * inner;
-        }
-    }
-    // A triangle mesh (oriented: the tool's query shape): the normal of the nearest feature,
-    // a pseudo-normal on an edge or a vertex.
-    if shape.as_trimesh().is_some() {
-        let (proj, feature) = shape.project_local_point_and_get_feature(local);
-        if let Some(n) = shape
-            .feature_normal_at_point(0, feature, proj.point)
-            .filter(|n| n.is_finite())
-            .and_then(|n| n.try_normalize())
-        {
-            return n;
-        }
-    }
-    let aabb = shape.compute_local_aabb();
-    let centre = aabb.center();
-    let radial = (local - centre).try_normalize().unwrap_or(Vector::Y);
-    let eps = 1e-3 * aabb.extents().max_element() + 10.0 * margin;
-    let ray = Ray::new(local + radial * eps, -radial);
-    if let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, 2.0 * eps, true) {
-        let n = hit.normal;
-        if hit.time_of_impact > 0.0 && n.is_finite() && n.dot(radial) > 0.0 {
-            if let Some(n) = n.try_normalize() {
-                return n;
-            }
-        }
-    }
-    let (proj, feature) = shape.project_local_point_and_get_feature(local);
-    shape
-        .feature_normal_at_point(0, feature, proj.point)
-        .filter(|n| n.is_finite() && n.dot(radial) > 0.0)
-        .unwrap_or(radial)
-}
-
-/// The face of `poly` whose plane is nearest above or least below `local`: its outward normal
-/// and the signed distance of `local` to its plane. For a point inside the polyhedron that
-/// face holds the nearest boundary point.
-pub(super) fn closest_face(
-    poly: &parry3d::shape::ConvexPolyhedron,
-    local: Vector,
-) -> Option<(Vector, Real)> {
-    face_planes(poly)
-        .map(|(n, v)| (n, n.dot(local - v)))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-}
-
-/// Each face of `poly` as its outward normal and one of its vertices (shape frame).
-pub(super) fn face_planes(
-    poly: &parry3d::shape::ConvexPolyhedron,
-) -> impl Iterator<Item = (Vector, Vector)> + '_ {
-    let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
-    poly.faces().iter().filter_map(move |f| {
-        let v = points.get(*adj.get(f.first_vertex_or_edge as usize)? as usize)?;
-        Some((f.normal, *v))
-    })
-}
-
-/// The nearest point of the tool's boundary to `p` (world). parry's projection of a point
-/// inside a convex polyhedron is approximate, so there the nearest face plane is used.
-pub(super) fn nearest_on_boundary(
-    shape: &dyn parry3d::shape::Shape,
-    pose: &Pose,
-    p: Vector,
-) -> Vector {
-    if let Some(poly) = shape.as_convex_polyhedron() {
-        let local = pose.inverse_transform_point(p);
-        if let Some((n, d)) = closest_face(poly, local) {
-            if d <= 0.0 {
-                return pose.transform_point(local - n * d);
-            }
-        }
-    }
-    shape.project_point(pose, p, false).point
-}
-
-/// Where the ray from `p` (inside the tool, world) along the unit `d` leaves the tool. For a
-/// convex polyhedron the nearest exit plane is used (parry's ray cast from inside a support
-/// map is iterative and can stop early).
-pub(super) fn exit_along(
-    shape: &dyn parry3d::shape::Shape,
-    pose: &Pose,
-    p: Vector,
-    d: Vector,
-) -> Option<Vector> {
-    if let Some(poly) = shape.as_convex_polyhedron() {
-        let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
-        let t = face_planes(poly)
-            .filter_map(|(n, v)| {
-                let along = n.dot(dl);
-                (along > 0.0).then(|| (-n.dot(local - v) / along).max(0.0))
-            })
-            .min_by(|a, b| a.total_cmp(b))?;
-        return Some(p + d * t);
-    }
-    shape
-        .cast_ray(pose, &Ray::new(p, d), Real::MAX, false)
-        .map(|t| p + d * t)
 }
