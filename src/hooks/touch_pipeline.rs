@@ -23,10 +23,11 @@ use std::sync::Arc;
 
 mod guard;
 mod hook_flags;
+mod pair_view;
 mod pose_sync;
 mod rapier_contacts;
 
-use guard::PairState;
+use pair_view::PairState;
 
 /// Tuning of [`TouchPipeline`].
 ///

@@ -2,12 +2,10 @@
 //! went through something) back to first touch; then the moved bodies' colliders are synced
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
+use super::pair_view::{collider_reach, push_out, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
-use super::rapier_contacts::{
-    collider_pose_now, rapier_contact_of, rapier_normal, supported, RapierContact,
-};
+use super::rapier_contacts::{collider_pose_now, rapier_contact_of, rapier_normal, supported};
 use super::*;
-use crate::geometry::ContactConfiguration;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
@@ -35,28 +33,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         };
         let slop = self.options.penetration_slop;
         let prediction = world.integration_parameters.prediction_distance();
-        // Odometers: distance every point of each moving body may have travelled.
-        for (h, b) in world.bodies.iter() {
-            let Some(prev) = self.hooks.prev_poses.get(&h) else {
-                continue;
-            };
-            let pose = b.position();
-            let radius = b
-                .colliders()
-                .iter()
-                .filter_map(|c| world.colliders.get(*c))
-                .map(collider_reach)
-                .fold(0.0, Real::max);
-            let step = (pose.translation - prev.translation).length()
-                + prev.rotation.angle_between(pose.rotation) * radius;
-            if step > 0.0 && step.is_finite() {
-                *self.odometers.entry(h).or_insert(0.0) += step;
-            }
-        }
-        self.odometers.retain(|h, _| world.bodies.contains(*h));
-        self.pair_states
-            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
-
+        self.advance_odometers(world);
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::default();
         let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
         let mut moved_before = 0;
@@ -64,19 +41,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             let mut moved = false;
             // Later passes look again only at the bodies the previous pass moved (a correction
             // can push a body into a third one).
-            let movers: Vec<RigidBodyHandle> = if pass == 0 {
-                world
-                    .bodies
-                    .iter()
-                    .filter(|(h, b)| {
-                        (b.is_dynamic() || self.tools.contains_key(h))
-                            && !b.is_sleeping()
-                            && b.colliders()
-                                .iter()
-                                .any(|c| self.hooks.meshes.contains_key(c))
-                    })
-                    .map(|(h, _)| h)
-                    .collect()
+            let movers = if pass == 0 {
+                self.movers(world)
             } else {
                 let mut m = moved_bodies[moved_before..].to_vec();
                 m.sort_unstable_by_key(|h| h.into_raw_parts());
@@ -578,77 +544,46 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         sync_moved_colliders(world, &mut moved_bodies);
         self.sync_hook_flags(world);
     }
-}
 
-/// How far a point of collider `co` can be from its body's origin: the offset to its parent
-/// plus its bounding radius (a turn by `θ` moves it by at most `θ` times this).
-pub(super) fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
-    co.position_wrt_parent()
-        .map_or(0.0, |p| p.translation.length())
-        + co.shape().compute_local_bounding_sphere().radius
-}
-
-/// The overlap of a pair when it was last measured, and both bodies' odometers then.
-#[derive(Copy, Clone, Debug)]
-pub(super) struct PairState {
-    overlap: Real,
-    odo_self: Real,
-    odo_partner: Real,
-}
-
-/// One pair as the guard reads it, before deciding anything: the partner's pose now, its
-/// translation over the step, the pair's relative travel (translation
-/// plus both rotations' arcs), rapier's contact points of the pair and whether they are
-/// trusted at that travel, and whether the partner is dynamic.
-#[derive(Copy, Clone, Debug)]
-struct PairView {
-    partner_pose: Pose,
-    dp: Vector,
-    travel: Real,
-    rapier: Option<RapierContact>,
-    trusted: bool,
-    partner_dynamic: bool,
-}
-
-impl PairView {
-    /// A slow pair the guard has nothing to do for, decided from rapier's points alone (the
-    /// same rules the guard applies to every pair it looks at): a resting pair with a dynamic
-    /// partner or within the resting slop, a non-resting one no deeper than the slop, or, with
-    /// no points, one that travelled less than the slop.
-    fn calm(&self, options: &TouchOptions) -> bool {
-        let slop = options.penetration_slop;
-        match &self.rapier {
-            Some(r) if r.in_contact_at_start => {
-                self.partner_dynamic || (self.trusted && r.depth <= options.resting_slop)
+    /// Advances the odometers (the distance every point of each moving body may have
+    /// travelled) by this step's motion, and forgets the bodies and pairs that left the world.
+    fn advance_odometers(&mut self, world: &PhysicsWorld) {
+        for (h, b) in world.bodies.iter() {
+            let Some(prev) = self.hooks.prev_poses.get(&h) else {
+                continue;
+            };
+            let pose = b.position();
+            let radius = b
+                .colliders()
+                .iter()
+                .filter_map(|c| world.colliders.get(*c))
+                .map(collider_reach)
+                .fold(0.0, Real::max);
+            let step = (pose.translation - prev.translation).length()
+                + prev.rotation.angle_between(pose.rotation) * radius;
+            if step > 0.0 && step.is_finite() {
+                *self.odometers.entry(h).or_insert(0.0) += step;
             }
-            Some(r) => !options.report_touching && self.trusted && r.depth <= slop,
-            None => !options.report_touching && self.travel <= slop,
         }
+        self.odometers.retain(|h, _| world.bodies.contains(*h));
+        self.pair_states
+            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
     }
-}
 
-/// The way out of an overlap along `out` (a world direction out of the partner) for the mover
-/// at its pose now: on the shapes themselves when the pair is `curved`
-/// ([`Reconstructor::push_out_shapes`]), by the exact method on the touch meshes otherwise
-/// (and when parry has no distance query for the shapes).
-fn push_out(
-    options: ReconstructionOptions,
-    curved: bool,
-    (partner, partner_mesh, partner_pose): (&rapier3d::geometry::Collider, &TouchMesh, &Pose),
-    (mover, mesh, pose): (&rapier3d::geometry::Collider, &TouchMesh, &Pose),
-    out: Vector,
-) -> Option<ContactConfiguration> {
-    let mut rec = Reconstructor::new(ReconstructionOptions {
-        zero_motion_direction: Some(-out),
-        ..options
-    });
-    if curved {
-        match rec.push_out_shapes(partner.shape(), partner_pose, mover.shape(), pose, out) {
-            Ok(Some(c)) => return Some(c),
-            Ok(None) => {}
-            Err(_) => return None,
-        }
+    /// The bodies the guard's first pass looks at: awake dynamic bodies and tools with a touch
+    /// mesh.
+    fn movers(&self, world: &PhysicsWorld) -> Vec<RigidBodyHandle> {
+        world
+            .bodies
+            .iter()
+            .filter(|(h, b)| {
+                (b.is_dynamic() || self.tools.contains_key(h))
+                    && !b.is_sleeping()
+                    && b.colliders()
+                        .iter()
+                        .any(|c| self.hooks.meshes.contains_key(c))
+            })
+            .map(|(h, _)| h)
+            .collect()
     }
-    rec.reconstruct(partner_mesh, partner_pose, mesh, pose, pose)
-        .ok()
 }

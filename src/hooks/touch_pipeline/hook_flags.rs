@@ -2,7 +2,7 @@
 //! only on the colliders of bodies that moved farther than rapier's prediction distance, since
 //! rapier recomputes every hooked pair's contacts every step.
 
-use super::guard::collider_reach;
+use super::pair_view::collider_reach;
 use super::*;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
