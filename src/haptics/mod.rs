@@ -33,13 +33,17 @@
 //!   runs slower than the wall, and a model is fully rendered one update interval after it
 //!   arrives. A larger world `dt` is the other way to keep up with the wall clock; it was
 //!   not re-measured with the ramp (before it, at 1/30 s the coupled contact bounced).
-//! - Passivity is not guaranteed everywhere (known bugs, ignored tests in
-//!   `tests/it/haptic_servo.rs`). In a world that steps slower than its clock and
-//!   irregularly, a property test over scale, stiffness and mass found the hand gaining
-//!   energy on heavy, stiff plates (0.3 m, 883 N/m, 750 kg: 0.025 J given, 0.0092 J taken by
-//!   the hand's damping), sooner with the update ramp on (1602 N/m, 1 kg: 0.053 J against
-//!   0.020 J), and with a cube dragged deep in a soft plate (its full solution spikes). Keep
-//!   the coupling's stiffness well under the passive bound and the world at its rate.
+//! - Passivity comes from the passivity controller ([`Servo::set_passivity`], off by
+//!   default). Without it, in a world that steps slower than its clock and irregularly, a
+//!   property test over scale, stiffness and mass found the hand gaining energy on heavy,
+//!   stiff plates (0.3 m, 883 N/m, 750 kg: 0.025 J given, 0.0092 J taken by the hand's
+//!   damping), sooner with the update ramp on (1602 N/m, 1 kg: 0.053 J against 0.020 J), and
+//!   with a cube dragged deep in a soft plate (its full solution spikes). With it those
+//!   cases and the property test pass (`tests/it/haptic_servo.rs`). Its price: once the loop
+//!   has given back more than it got (a fast strike on a damped surface whose dampers' force
+//!   arrives a step late), the push along the hand's motion stays cut until the hand pays it
+//!   back, and a hand resting there feels less than the surface's force (1.0 N against
+//!   1.7 N on the servo bench's 100,000-node plate struck at speed): hence off by default.
 //! - Between updates, a contact that starts is rendered from one surface vertex (the deepest
 //!   the tool covers, with its own stiffness), not from the surface's coupled response: the
 //!   first update after a touch corrects it.
