@@ -5,8 +5,10 @@
 //! update computes at that proxy; the proxy balances the coupling spring and the model (solved
 //! by hand); a hand pressing a stiff surface over repeated cycles never gets energy back from
 //! the rendering; a world that steps irregularly and slower than its clock is eased in (no
-//! jump over 5 % of the peak, no energy to the hand); threads exchanging models while the
-//! world steps, refactors and swaps tools never deadlock, tear a model or panic.
+//! jump over 5 % of the peak, no energy to the hand); with the passivity controller on, no
+//! energy to the hand at any plate scale, stiffness or mass (property test); threads
+//! exchanging models while the world steps, refactors and swaps tools never deadlock, tear a
+//! model or panic.
 
 use proptest::prelude::*;
 use rapier_touch::haptics::{haptic_link, Servo, ServoModel, SimulatedHand, VirtualCoupling};
