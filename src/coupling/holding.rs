@@ -68,18 +68,12 @@ pub(super) fn surface_substep(
     std::mem::swap(&mut s.pressed, &mut s.last_pressed);
     s.pressed.clear();
     // Which vertices the tools held through this step: marked in `was_held` (all false but
-    // those), the last substep's marks cleared.
+    // those) while the tools look, cleared after.
     s.was_held.resize(s.surface.num_vertices(), false);
-    for &i in &s.marked {
-        if let Some(w) = s.was_held.get_mut(i as usize) {
-            *w = false;
-        }
-    }
     s.held_list.retain(|&i| s.surface.is_held(i));
     for &i in &s.held_list {
         s.was_held[i as usize] = true;
     }
-    s.marked.clone_from(&s.held_list);
     s.surface.release_all();
     // A tool moves only the vertices it holds, which later tools skip: one read of the
     // positions serves every tool.
@@ -162,6 +156,9 @@ pub(super) fn surface_substep(
                 pressed_points: pn,
             },
         ));
+    }
+    for &i in &s.held_list {
+        s.was_held[i as usize] = false;
     }
     // Sharp features, against the surface as the vertex holds left it, pressed together.
     now_held.sort_unstable();

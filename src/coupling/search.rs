@@ -40,9 +40,12 @@ impl ContactSearch {
         let Some(bvh) = self.bvh.as_mut().filter(|_| !fresh) else {
             let slack = SLACK_PER_EDGE * mean_edge(now, surface.triangles());
             surface.watch_motion(slack);
-            let mut bvh = SurfaceBvh::new(now, surface.triangles(), slack);
-            bvh.rebuild(now, Some(before));
-            self.bvh = Some(bvh);
+            self.bvh = Some(SurfaceBvh::new_swept(
+                now,
+                before,
+                surface.triangles(),
+                slack,
+            ));
             // Every vertex may have moved.
             self.escaped.clear();
             self.escaped.extend(0..now.len() as u32);

@@ -149,12 +149,11 @@ pub struct AttachedSurface {
     substeps: u32,
     pub(super) scratch: Vec<Vector>,
     pub(super) before: Vec<Vector>,
-    /// Which vertices were held at the start of the substep (`true` only at `held_list`).
+    /// Which vertices were held through the substep's step (`true` only at `held_list`, and
+    /// only while the tools look; all `false` between substeps).
     pub(super) was_held: Vec<bool>,
     /// The vertices the tools held at the end of the last substep.
     pub(super) held_list: Vec<u32>,
-    /// The vertices marked in `was_held`.
-    pub(super) marked: Vec<u32>,
     /// Points the tools pressed in the current and the last substep.
     pub(super) pressed: Vec<Pressed>,
     pub(super) last_pressed: Vec<Pressed>,
@@ -393,7 +392,6 @@ impl SurfaceSet {
             before: verts.clone(),
             was_held: Vec::new(),
             held_list: Vec::new(),
-            marked: Vec::new(),
             pressed: Vec::new(),
             last_pressed: Vec::new(),
             search: ContactSearch::default(),

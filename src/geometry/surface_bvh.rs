@@ -110,6 +110,26 @@ impl SurfaceBvh {
     /// assert!(tris.contains(&1));
     /// ```
     pub fn new(positions: &[Vector], triangles: &[[u32; 3]], slack: Real) -> Self {
+        let mut out = Self::unbuilt(positions, triangles, slack);
+        out.rebuild(positions, None);
+        out
+    }
+
+    /// [`Self::new`] with the leaves also bounding `before` (the positions at the start of the
+    /// substep that ended at `now`), as [`Self::rebuild`] with `Some(before)`: one build.
+    pub fn new_swept(
+        now: &[Vector],
+        before: &[Vector],
+        triangles: &[[u32; 3]],
+        slack: Real,
+    ) -> Self {
+        let mut out = Self::unbuilt(now, triangles, slack);
+        out.rebuild(now, Some(before));
+        out
+    }
+
+    /// Everything but the tree: the kept triangles, the lone vertices, each vertex's leaves.
+    fn unbuilt(positions: &[Vector], triangles: &[[u32; 3]], slack: Real) -> Self {
         let n = positions.len();
         let (ids, triangles): (Vec<u32>, Vec<[u32; 3]>) = triangles
             .iter()
@@ -144,7 +164,7 @@ impl SurfaceBvh {
                 fill[v as usize] += 1;
             }
         }
-        let mut out = Self {
+        Self {
             bvh: Bvh::new(),
             triangles,
             ids,
@@ -163,9 +183,7 @@ impl SurfaceBvh {
             generation: 0,
             log: Vec::new(),
             log_base: 0,
-        };
-        out.rebuild(positions, None);
-        out
+        }
     }
 
     /// The slack the leaves are fattened by.
@@ -429,5 +447,39 @@ mod tests {
         bvh.update(&[6], &moved, &v);
         bvh.near_cached(&mut cache, &far, 0.5, &mut tris, &mut verts);
         assert!(verts.contains(&6) && tris == [2]);
+    }
+}
+
+#[cfg(test)]
+mod bad_input {
+    use super::*;
+
+    #[test]
+    fn empty_degenerate_and_non_finite_input_gives_no_panic_and_no_candidates_from_nowhere() {
+        let big = Aabb::new(Vector::splat(-1e3), Vector::splat(1e3));
+        let (mut tris, mut verts) = (Vec::new(), Vec::new());
+        // Empty.
+        let mut empty = SurfaceBvh::new(&[], &[], 0.1);
+        empty.near(&big, &mut tris, &mut verts);
+        assert!(tris.is_empty() && verts.is_empty());
+        empty.update(&[0, 7], &[], &[]);
+        // A degenerate triangle (one point) and a NaN slack: the vertex is still found.
+        let p = [Vector::new(1.0, 2.0, 3.0)];
+        let mut point = SurfaceBvh::new(&p, &[[0, 0, 0]], Real::NAN);
+        assert_eq!(point.slack(), 0.0);
+        point.near(&big, &mut tris, &mut verts);
+        assert_eq!((tris.as_slice(), verts.as_slice()), (&[0][..], &[0][..]));
+        // A NaN vertex: no panic; the finite triangle is still found where it is.
+        let v = [
+            Vector::ZERO,
+            Vector::X,
+            Vector::Z,
+            Vector::new(Real::NAN, 0.0, 0.0),
+        ];
+        let mut nan = SurfaceBvh::new(&v, &[[0, 2, 1], [1, 2, 3]], 0.01);
+        let near_origin = Aabb::new(Vector::splat(-0.1), Vector::splat(0.1));
+        nan.near(&near_origin, &mut tris, &mut verts);
+        assert!(tris.contains(&0));
+        nan.update(&[3], &v, &v);
     }
 }

@@ -198,7 +198,7 @@ impl<D: HapticDevice> Servo<D> {
     /// passive stiffness (`k Δx² / 2` per tick). When the loop has given the hand more than
     /// that (a deficit), the part of `force` pushing along the device's motion (`dv`, held
     /// over the next tick) shrinks by what would pay the deficit back, never past zero.
-    fn within_reserve(&self, force: Vector, dv: Vector) -> Vector {
+    fn pay_back_deficit(&self, force: Vector, dv: Vector) -> Vector {
         let step = dv * self.period;
         let len2 = step.length_squared() as f64;
         let work = force.dot(step) as f64;
@@ -217,13 +217,14 @@ impl<D: HapticDevice> Servo<D> {
         }
     }
 
-    /// Switches the passivity controller on or off (off by default; the type's docs). On, the loop never gives the hand,
-    /// since it started, more work than the hand put in (one tick's prediction aside): a
-    /// world whose forces arrive late or eased in cannot pump energy into the hand. The
-    /// price: after the loop has given back more than it got (a fast strike on a damped
-    /// surface whose dampers' force arrived a step late), the push along the hand's motion
-    /// stays cut until the hand pays that back, and a hand resting there feels less than the
-    /// surface's force (measured: 1.0 N against 1.7 N on the servo bench's 100,000-node plate).
+    /// Switches the passivity controller on or off (off by default; the type's docs). On,
+    /// the loop never gives the hand, since it started, more work than the hand put in (one
+    /// tick's prediction aside): a world whose forces arrive late or eased in cannot pump
+    /// energy into the hand. The price: after the loop has given back more than it got (a
+    /// fast strike on a damped surface whose dampers' force arrived a step late), the push
+    /// along the hand's motion stays cut until the hand pays that back, and a hand resting
+    /// there feels less than the surface's force (measured: 1.0 N against 1.7 N on the servo
+    /// bench's 100,000-node plate).
     pub fn set_passivity(&mut self, on: bool) {
         self.passivity = on;
     }
@@ -312,7 +313,7 @@ impl<D: HapticDevice> Servo<D> {
             self.offset_work = 0.0;
         }
         let force = if self.passivity {
-            self.within_reserve(force, dv)
+            self.pay_back_deficit(force, dv)
         } else {
             force
         };

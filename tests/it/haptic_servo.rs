@@ -790,51 +790,55 @@ fn a_device_that_reads_nan_mid_press_gets_no_force_and_moves_no_tool() {
     // Pressed 1 cm into a plate, then the device reads NaN (a dropped USB frame) for 200
     // ticks, then presses again: no NaN reaches the device or the world, the tool waits
     // where it was, and the press is felt again after.
-    let (mut world, mut set, tool, _) =
-        plate_scene(0.3, 24, 400.0, 0.5, 4, SharedShape::ball(0.03));
-    let (world_end, servo_end) = haptic_link();
-    set.connect_haptic(tool, world_end, &mut world).unwrap();
-    let device = Scripted {
-        tick: 0,
-        pose: |t| {
-            if (2000..2200).contains(&t) {
-                Vector::splat(f32::NAN)
-            } else {
-                Vector::new(0.0, 0.02, 0.0)
+    // With the passivity controller off and on.
+    for passive in [false, true] {
+        let (mut world, mut set, tool, _) =
+            plate_scene(0.3, 24, 400.0, 0.5, 4, SharedShape::ball(0.03));
+        let (world_end, servo_end) = haptic_link();
+        set.connect_haptic(tool, world_end, &mut world).unwrap();
+        let device = Scripted {
+            tick: 0,
+            pose: |t| {
+                if (2000..2200).contains(&t) {
+                    Vector::splat(f32::NAN)
+                } else {
+                    Vector::new(0.0, 0.02, 0.0)
+                }
+            },
+            forces: Vec::new(),
+        };
+        let coupling = VirtualCoupling {
+            stiffness: 2000.0,
+            damping: 0.0,
+            max_force: 30.0,
+        };
+        let mut servo = Servo::new(device, servo_end, coupling, 5000.0).unwrap();
+        servo.set_passivity(passive);
+        let mut before_gap = Vector::ZERO;
+        for step in 0..60 {
+            for _ in 0..83 {
+                servo.tick();
             }
-        },
-        forces: Vec::new(),
-    };
-    let coupling = VirtualCoupling {
-        stiffness: 2000.0,
-        damping: 0.0,
-        max_force: 30.0,
-    };
-    let mut servo = Servo::new(device, servo_end, coupling, 5000.0).unwrap();
-    let mut before_gap = Vector::ZERO;
-    for step in 0..60 {
-        for _ in 0..83 {
-            servo.tick();
+            set.step(&mut world);
+            let at = world.colliders[tool].position().translation;
+            assert!(at.is_finite(), "step {step}: tool at {at:?}");
+            if servo.device().tick < 2000 {
+                before_gap = at;
+            } else if servo.device().tick < 2200 {
+                assert_eq!(
+                    at, before_gap,
+                    "step {step}: the tool moved during the NaN reads"
+                );
+            }
         }
-        set.step(&mut world);
-        let at = world.colliders[tool].position().translation;
-        assert!(at.is_finite(), "step {step}: tool at {at:?}");
-        if servo.device().tick < 2000 {
-            before_gap = at;
-        } else if servo.device().tick < 2200 {
-            assert_eq!(
-                at, before_gap,
-                "step {step}: the tool moved during the NaN reads"
-            );
-        }
+        let forces = &servo.device().forces;
+        assert!(forces.iter().all(|f| f.is_finite()));
+        assert!(forces[2000..2199].iter().all(|f| *f == Vector::ZERO));
+        // Pressed before and after: the ball's centre 1 cm under its rest height pushes back.
+        assert!(
+            forces[1990].y > 0.5 && forces.last().unwrap().y > 0.5,
+            "{:?}",
+            forces.last()
+        );
     }
-    let forces = &servo.device().forces;
-    assert!(forces.iter().all(|f| f.is_finite()));
-    assert!(forces[2000..2199].iter().all(|f| *f == Vector::ZERO));
-    // Pressed before and after: the ball's centre 1 cm under its rest height pushes back.
-    assert!(
-        forces[1990].y > 0.5 && forces.last().unwrap().y > 0.5,
-        "{:?}",
-        forces.last()
-    );
 }
