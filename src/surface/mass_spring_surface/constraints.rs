@@ -4,7 +4,7 @@
 //! weights). Both are solved together through the filter's columns, so the rest of the
 //! surface responds to them as to moving pins.
 
-use super::active_set::solve_pushing;
+use super::active_set::{give_back, solve_pushing, zeroed, Scratch};
 use super::{motion_watch, MassSpringSurface, SurfaceError, NOT_FREE};
 use crate::math::{Real, Vector};
 use crate::surface::filter::Filter;
@@ -57,6 +57,8 @@ impl PointHold {
 pub(crate) struct ActiveMemory {
     seen: HashSet<[u32; 3]>,
     pushing: HashSet<[u32; 3]>,
+    /// The solves' dense storage, reused.
+    scratch: Scratch,
 }
 
 impl ActiveMemory {
@@ -210,19 +212,23 @@ impl MassSpringSurface {
         }
         // A = J M⁻¹ Jᵀ over the kept presses; δx = M⁻¹ Jᵀ μ with A μ = depth (likewise for the
         // velocities).
-        let mut a = nalgebra::DMatrix::<f64>::zeros(m, m);
-        for (i, (hi, _, _)) in kept.iter().enumerate() {
-            for (j, (hj, _, _)) in kept.iter().enumerate() {
-                let nn = hi.normal.dot(hj.normal);
-                let mut sum = 0.0;
-                for (vi, wi) in hi.entries() {
-                    for (vj, wj) in hj.entries() {
-                        if vi == vj {
-                            sum += wi * wj * inv_mass(self, vi);
-                        }
-                    }
+        let mut scratch = std::mem::take(&mut self.pushing.scratch);
+        let mut a = zeroed(&mut scratch.system, m, m);
+        // Two presses meet only on the vertices they share: the (vertex, press, weight)
+        // entries sorted by vertex give the nonzero pairs (not all m² of them).
+        let mut on_vertex: Vec<(u32, usize, f64)> = kept
+            .iter()
+            .enumerate()
+            .flat_map(|(i, (h, _, _))| h.entries().map(move |(v, w)| (v, i, w)))
+            .collect();
+        on_vertex.sort_unstable_by_key(|e| (e.0, e.1));
+        for run in on_vertex.chunk_by(|x, y| x.0 == y.0) {
+            let im = inv_mass(self, run[0].0);
+            for &(_, i, wi) in run {
+                for &(_, j, wj) in run {
+                    let nn = kept[i].0.normal.dot(kept[j].0.normal);
+                    a[(i, j)] += nn * wi * wj * im;
                 }
-                a[(i, j)] = nn * sum;
             }
         }
         let scale = (0..m).map(|i| a[(i, i)]).fold(0.0, f64::max);
@@ -233,8 +239,17 @@ impl MassSpringSurface {
         // of its holder) or that the others' pushes satisfy is left out.
         let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
         let tol = 1e-9 * depth.amax();
-        let Some((mu, active)) = solve_pushing(&a, &depth, |_| true, |i| depth[i] > 0.0, tol)
-        else {
+        let solved = solve_pushing(
+            &a,
+            &depth,
+            |_| true,
+            |i| depth[i] > 0.0,
+            tol,
+            &mut scratch.factor,
+        );
+        let Some((mu, active)) = solved else {
+            give_back(&mut scratch.system, a);
+            self.pushing.scratch = scratch;
             return Ok(out.iter().map(|_| None).collect());
         };
         // Velocities: the pushing presses get their holder's normal velocity, by impulses that
@@ -243,7 +258,17 @@ impl MassSpringSurface {
         let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
         let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
         let vtol = 1e-9 * (1.0 + dv.amax());
-        let Some((nu, _)) = solve_pushing(&sub, &dv, |_| true, |i| dv[i] > 0.0, vtol) else {
+        let solved = solve_pushing(
+            &sub,
+            &dv,
+            |_| true,
+            |i| dv[i] > 0.0,
+            vtol,
+            &mut scratch.factor,
+        );
+        let Some((nu, _)) = solved else {
+            give_back(&mut scratch.system, a);
+            self.pushing.scratch = scratch;
             return Ok(out.iter().map(|_| None).collect());
         };
         for (r, &i) in rows.iter().enumerate() {
@@ -272,6 +297,8 @@ impl MassSpringSurface {
             // The holder's velocity, as given, is the current point velocity plus `k.2`.
             k.0.min_velocity = velocity + k.2 - gap / self.dt;
         }
+        give_back(&mut scratch.system, a);
+        self.pushing.scratch = scratch;
         self.point_holds.extend(kept.into_iter().map(|(h, _, _)| h));
         Ok(out)
     }
@@ -401,14 +428,16 @@ pub(super) fn constrain(
         }
     }
     // P restricted to the involved vertices (h × h), one column read each.
-    let mut p_hh = nalgebra::DMatrix::<f64>::zeros(h, h);
+    let mut p_hh = zeroed(&mut memory.scratch.block, h, h);
     filter.prepare_columns(&list);
     for (b, &fj) in list.iter().enumerate() {
         filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
     }
     let m = cons.len();
-    let mut a_mat = nalgebra::DMatrix::<f64>::zeros(m, m);
+    let mut a_mat = zeroed(&mut memory.scratch.system, m, m);
     let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+    // P's column k (column-major storage): P[(j, k)] = p_col[k * h + j] = P[(k, j)].
+    let p_col = p_hh.as_slice();
     for (a, (da, ea, na, point)) in cons.iter().enumerate() {
         // Vertex holds: no change of the held velocity. Point holds: at least their least
         // velocity.
@@ -428,15 +457,18 @@ pub(super) fn constrain(
                         .sum::<f64>()
             }
         };
-        for (b, (db, eb, nb, _)) in cons.iter().enumerate() {
+        // A is symmetric (P is): the upper triangle is computed and mirrored.
+        for (b, (db, eb, nb, _)) in cons.iter().enumerate().skip(a) {
             let dd = da.dot(*db);
             let mut s = 0.0;
             for &(ka, wa) in &ea[..*na] {
+                let column = &p_col[ka * h..ka * h + h];
                 for &(kb, wb) in &eb[..*nb] {
-                    s += wa * wb * p_hh[(ka, kb)];
+                    s += wa * wb * column[kb];
                 }
             }
             a_mat[(a, b)] = dd * s;
+            a_mat[(b, a)] = dd * s;
         }
     }
     // A point hold on a held vertex, or two on the same points, repeat a constraint: a tiny
@@ -452,10 +484,20 @@ pub(super) fn constrain(
         .iter()
         .map(|c| c.3.map(|pi| points[pi].key()))
         .collect();
+    give_back(&mut memory.scratch.block, p_hh);
+    let mut factor = std::mem::take(&mut memory.scratch.factor);
     let starts_in = |c: usize| keys[c].is_none_or(|k| memory.starts_in(k, rhs[c]));
-    let Some((lambda, active)) =
-        solve_pushing(&a_mat, &rhs, |c| cons[c].3.is_some(), starts_in, tol)
-    else {
+    let solved = solve_pushing(
+        &a_mat,
+        &rhs,
+        |c| cons[c].3.is_some(),
+        starts_in,
+        tol,
+        &mut factor,
+    );
+    memory.scratch.factor = factor;
+    give_back(&mut memory.scratch.system, a_mat);
+    let Some((lambda, active)) = solved else {
         return;
     };
     memory.seen.clear();
@@ -477,10 +519,5 @@ pub(super) fn constrain(
             points[*pi].impulse += lambda[c];
         }
     }
-    for (k, &fj) in list.iter().enumerate() {
-        let j = impulse[k];
-        if j != DVec3::ZERO {
-            filter.for_column(fj, |i, w| dv[i as usize] += j * w);
-        }
-    }
+    filter.add_impulses(&list, &impulse, dv);
 }
