@@ -3,7 +3,7 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
-use super::boundary::{exit_along, nearest_on_boundary, outward_normal};
+use super::boundary::{distance_outside, exit_along, nearest_on_boundary, outward_normal};
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{find_contacts, part_query, press_all, reaction_of, record_impulses};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
@@ -247,7 +247,7 @@ fn retarget_holds(
         }
         let p = surface.position(i);
         let holder = poses.iter().find(|(shape, start, _, aabb, margin)| {
-            aabb.contains_local_point(p) && shape.distance_to_point(start, p, true) <= *margin
+            aabb.contains_local_point(p) && distance_outside(*shape, start, p) <= *margin
         });
         let Some((_, start, end, _, _)) = holder else {
             continue;
@@ -357,7 +357,7 @@ pub(super) fn hold_vertices(
         let rel = motion - own;
         // In contact: inside the tool, or on its boundary (where the last substep left a held
         // vertex) within a hair, or held before and left behind by the relative motion.
-        let gap = shape.distance_to_point(pose, *p, true);
+        let gap = distance_outside(shape, pose, *p);
         if gap > margin {
             if !chase || gap > rel.length() + motion.length() + margin {
                 continue;
@@ -373,8 +373,17 @@ pub(super) fn hold_vertices(
             Some(anchor) => (pose.transform_point(anchor), anchor),
             None => {
                 let nearest = nearest_on_boundary(shape, pose, *p);
+                // Walked back along its relative motion over the substep, a vertex that came
+                // in leaves where it entered: no farther than that motion (twice, for the arc
+                // a turning tool's point follows). An exit farther away is the far side of a
+                // tool the vertex did not cross this substep: one lying on a face and grazed
+                // along it (a cube dragged over a plate) is "inside" by a rounding error, and
+                // was thrown across the whole cube (a 2 kN spike on a 440 N press).
+                let walk = 2.0 * rel.length() + margin;
                 let out = if entering && rel.length() > (nearest - *p).length() + margin {
-                    exit_along(shape, pose, *p, rel.normalize()).unwrap_or(nearest)
+                    exit_along(shape, pose, *p, rel.normalize())
+                        .filter(|q| (*q - *p).length() <= walk)
+                        .unwrap_or(nearest)
                 } else {
                     nearest
                 };

@@ -37,9 +37,9 @@
 //!   default). Without it, in a world that steps slower than its clock and irregularly, a
 //!   property test over scale, stiffness and mass found the hand gaining energy on heavy,
 //!   stiff plates (0.3 m, 883 N/m, 750 kg: 0.025 J given, 0.0092 J taken by the hand's
-//!   damping), sooner with the update ramp on (1602 N/m, 1 kg: 0.053 J against 0.020 J), and
-//!   with a cube dragged deep in a soft plate (its full solution spikes). With it those
-//!   cases and the property test pass (`tests/it/haptic_servo.rs`). Its price: once the loop
+//!   damping) and sooner with the update ramp on (1602 N/m, 1 kg: 0.053 J against
+//!   0.020 J). With it those cases and the property test pass
+//!   (`tests/it/haptic_servo.rs`). Its price: once the loop
 //!   has given back more than it got (a fast strike on a damped surface whose dampers' force
 //!   arrives a step late), the push along the hand's motion stays cut until the hand pays it
 //!   back, and a hand resting there feels less than the surface's force (1.0 N against

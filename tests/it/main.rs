@@ -9,6 +9,7 @@ mod every_scale;
 mod fig4;
 mod friction;
 mod gltf_input;
+mod grazing_drag;
 mod haptic_servo;
 mod haptics;
 mod main_loop;
