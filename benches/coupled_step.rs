@@ -195,6 +195,15 @@ fn bench(c: &mut Criterion) {
         ),
         ("784n_6cubes_60hz", 27, 6, 1, 1.0 / 60.0, true, false),
         (
+            "784n_6cubes_60hz_friction",
+            27,
+            6,
+            1,
+            1.0 / 60.0,
+            true,
+            true,
+        ),
+        (
             "784n_6tools_60hz_17sub",
             27,
             6,
