@@ -175,6 +175,48 @@ pub fn scaled_pose(p: &Pose, k: f32) -> Pose {
     Pose::from_parts(p.translation * k, p.rotation)
 }
 
+/// A plate `size` wide (`cells` per side, rim pinned) of edge stiffness `k` on a fixed body,
+/// and a kinematic tool of `shape` above it.
+pub fn plate_scene(
+    size: f32,
+    cells: u32,
+    k: f32,
+    mass: f32,
+    substeps: u32,
+    shape: rapier_touch::rapier3d::prelude::SharedShape,
+) -> (
+    rapier_touch::rapier3d::prelude::PhysicsWorld,
+    SurfaceSet,
+    rapier_touch::rapier3d::prelude::ColliderHandle,
+    SurfaceHandle,
+) {
+    use rapier_touch::rapier3d::prelude::*;
+    use rapier_touch::surface::meshing::{plate, plate_rim};
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
+    let fixed = world.insert_body(RigidBodyBuilder::fixed());
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
+        .stiffness(k)
+        .damping(0.02 * k.sqrt())
+        .mass(MassDistribution::Total(mass))
+        .pinned(plate_rim(cells, cells))
+        .build()
+        .unwrap();
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps,
+        collider: true,
+    };
+    let h = set.insert(surface, fixed, &mut world, options).unwrap();
+    let body = world.insert_body(
+        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, size, 0.0)),
+    );
+    let tool = world.insert_collider(ColliderBuilder::new(shape), Some(body));
+    (world, set, tool, h)
+}
+
 /// Proptest strategies shared by the property tests.
 pub mod strategies {
     use proptest::prelude::*;

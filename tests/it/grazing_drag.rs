@@ -9,10 +9,10 @@
 //! and tool: a box, a cylinder, and the same box as a convex hull (parry's `ConvexPolyhedron`,
 //! whose point queries take another path).
 
+use crate::common::plate_scene;
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::{plate, plate_rim};
 
 /// What one drag saw.
 struct Drag {
@@ -29,29 +29,10 @@ struct Drag {
 /// second, held a second, dragged one half-size along `direction` over a second.
 fn drag(scale: f32, k: f32, mass: f32, substeps: u32, shape: u8, direction: f32) -> Drag {
     let size = 0.3 * scale;
-    let cells = 24;
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    let fixed = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
-        .stiffness(k)
-        .damping(0.02 * k.sqrt())
-        .mass(MassDistribution::Total(mass))
-        .pinned(plate_rim(cells, cells))
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps,
-        collider: true,
-    };
-    set.insert(surface, fixed, &mut world, options).unwrap();
     let half = 0.03 * scale;
-    let collider = match shape {
-        0 => ColliderBuilder::cuboid(half, half, half),
-        1 => ColliderBuilder::cylinder(half, half),
+    let shape = match shape {
+        0 => SharedShape::cuboid(half, half, half),
+        1 => SharedShape::cylinder(half, half),
         _ => {
             let corners: Vec<Vector> = (0..8)
                 .map(|c| {
@@ -62,13 +43,11 @@ fn drag(scale: f32, k: f32, mass: f32, substeps: u32, shape: u8, direction: f32)
                     )
                 })
                 .collect();
-            ColliderBuilder::convex_hull(&corners).unwrap()
+            SharedShape::convex_hull(&corners).unwrap()
         }
     };
-    let body = world.insert_body(
-        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, size, 0.0)),
-    );
-    let tool = world.insert_collider(collider, Some(body));
+    let (mut world, mut set, tool, _) = plate_scene(size, 24, k, mass, substeps, shape);
+    let body = world.colliders[tool].parent().unwrap();
     set.add_tool(tool, &mut world).unwrap();
     let depth = 0.6 * half;
     let along = Vector::new(direction.cos(), 0.0, direction.sin()) * half;

@@ -10,49 +10,14 @@
 //! exchanging models while the world steps, refactors and swaps tools never deadlock, tear a
 //! model or panic.
 
+use crate::common::plate_scene;
 use proptest::prelude::*;
 use rapier_touch::haptics::{haptic_link, Servo, ServoModel, SimulatedHand, VirtualCoupling};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::math::Matrix;
 use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::scenes::HapticScene;
-use rapier_touch::surface::meshing::{plate, plate_rim};
 use std::time::{Duration, Instant};
-
-/// A plate `size` wide (`cells` per side, rim pinned) of edge stiffness `k` on a fixed body,
-/// and a kinematic tool of `shape` above it.
-fn plate_scene(
-    size: f32,
-    cells: u32,
-    k: f32,
-    mass: f32,
-    substeps: u32,
-    shape: SharedShape,
-) -> (PhysicsWorld, SurfaceSet, ColliderHandle, SurfaceHandle) {
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    let fixed = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
-        .stiffness(k)
-        .damping(0.02 * k.sqrt())
-        .mass(MassDistribution::Total(mass))
-        .pinned(plate_rim(cells, cells))
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps,
-        collider: true,
-    };
-    let h = set.insert(surface, fixed, &mut world, options).unwrap();
-    let body = world.insert_body(
-        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, size, 0.0)),
-    );
-    let tool = world.insert_collider(ColliderBuilder::new(shape), Some(body));
-    (world, set, tool, h)
-}
 
 /// What a synchronous run (servo ticks between world steps, on one thread) saw.
 struct Run {
