@@ -224,11 +224,7 @@ pub fn tool_surface_contacts(
         let moved = (0..3)
             .map(|k| (now[k] - before[k]).length())
             .fold(0.0, f64::max);
-        let (lo, hi) = (
-            now[0].min(now[1]).min(now[2]),
-            now[0].max(now[1]).max(now[2]),
-        );
-        tris.push((t, now, n * sign, moved, lo, hi));
+        tris.push((t, now, n * sign, moved));
         // Area-weighted vertex normals of the candidate region, toward the tool.
         let area_normal = (now[1] - now[0]).cross(now[2] - now[0]) * sign;
         if let Some(idx) = surface.triangles.get(t as usize) {
@@ -254,16 +250,9 @@ pub fn tool_surface_contacts(
         let feature = Feature::Vertex(v as u32);
         let mut best: Option<(f64, SurfaceContact)> = None;
         let travel = (p1 - p0).length() + margin;
-        for (t, now, n, moved, lo, hi) in &tris {
+        for (t, now, n, moved) in &tris {
             let h1 = (p1 - now[0]).dot(*n);
             if h1.abs() > travel + moved {
-                continue;
-            }
-            // The line along the normal through the vertex meets the triangle only if the
-            // vertex is within |h1| of it, so within the triangle's bounds grown by that.
-            let reach = DVec3::splat(h1.abs());
-            if (p1 - (*hi + reach)).max_element() > 0.0 || ((*lo - reach) - p1).max_element() > 0.0
-            {
                 continue;
             }
             // The line through the vertex along the normal cuts the triangle (eq. 3).
@@ -305,7 +294,7 @@ pub fn tool_surface_contacts(
     // triangle that has it (its normal and motion).
     let mut seen = parry3d::utils::hashset::HashSet::default();
     let mut surface_edges = Vec::with_capacity(tris.len() * 2);
-    for (t, now, n, moved, _, _) in &tris {
+    for (t, now, n, moved) in &tris {
         let idx = surface.triangles[*t as usize];
         for k in 0..3 {
             let (i, j) = (idx[k], idx[(k + 1) % 3]);
