@@ -235,6 +235,10 @@ impl Cholesky {
         let Some(&first) = positions.iter().min() else {
             return Vec::new();
         };
+        // Downdates cost (k - p)² rotations per row, a refactorization (k - first)³ / 6
+        // multiply-adds; measured on the six cubes' solve (`coupled_step`), downdating up to
+        // (k - first)³ was the faster side of the line (47 µs per constraint solve against
+        // 49 µs with a third of it, 62 µs with a thirty-sixth).
         let downdates: usize = positions.iter().map(|&p| (k - p) * (k - p)).sum();
         if downdates <= (k - first).pow(3) {
             rows.iter().for_each(|&i| self.remove(i));
