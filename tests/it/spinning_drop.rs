@@ -19,6 +19,10 @@ enum Floor {
 enum Mover {
     Box,
     LPrism,
+    /// Curved shapes with corners or rims (their touch meshes are tessellations).
+    Cone,
+    RoundCylinder,
+    RoundHull,
 }
 
 fn l_prism() -> (Vec<Vector>, Vec<[u32; 3]>) {
@@ -93,6 +97,20 @@ fn drop(
             let (v, i) = l_prism();
             (v.clone(), ColliderBuilder::trimesh(v, i).unwrap())
         }
+        Mover::Cone => (Vec::new(), ColliderBuilder::cone(0.25, 0.25)),
+        Mover::RoundCylinder => (Vec::new(), ColliderBuilder::round_cylinder(0.2, 0.25, 0.05)),
+        Mover::RoundHull => {
+            let corners: Vec<Vector> = (0..8)
+                .map(|c| {
+                    let s = |bit: u32, h: f32| if c & bit == 0 { -h } else { h };
+                    Vector::new(s(1, 0.2), s(2, 0.15), s(4, 0.1))
+                })
+                .collect();
+            (
+                Vec::new(),
+                ColliderBuilder::round_convex_hull(&corners, 0.05).unwrap(),
+            )
+        }
     };
     let ch = w.insert_collider(collider.active_hooks(flags).density(density), Some(body));
     let mut touch = TouchPipeline::default();
@@ -107,10 +125,20 @@ fn drop(
         if body_pose.translation.y < -0.05 {
             return None;
         }
-        let lowest = verts
-            .iter()
-            .map(|&v| body_pose.transform_point(v).y)
-            .fold(f32::MAX, f32::min);
+        // A polyhedron's lowest vertex; a curved shape's support point straight down.
+        let lowest = if verts.is_empty() {
+            let co = &w.colliders[ch];
+            co.shape()
+                .as_support_map()
+                .expect("the curved movers are support maps")
+                .support_point(co.position(), -Vector::Y)
+                .y
+        } else {
+            verts
+                .iter()
+                .map(|&v| body_pose.transform_point(v).y)
+                .fold(f32::MAX, f32::min)
+        };
         deepest = deepest.max(-lowest);
     }
     Some(deepest)
@@ -174,4 +202,42 @@ fn light_and_heavy_spinning_bodies_stay_within_a_millimetre() {
             }
         }
     }
+}
+
+/// Curved bodies with corners or rims (a cone, a rounded cylinder, a rounded hull), whose
+/// touch meshes are tessellations, do not yet meet the millimetre: rapier's contact points on
+/// them were trusted however far the body moved, and a turning cone or rounded hull brought in
+/// a corner they did not hold (139 mm and 36 mm into the floors of rapier's CCD and
+/// convex-hull stress scenes; here a cone 38 mm, a rounded cylinder 3.5 mm). No longer
+/// trusted, the worst measured is a cone's 9.4 mm (rounded cylinder 1.5 mm, rounded hull
+/// 1.4 mm; README, "Documented behaviours"). This holds them to a centimetre and never
+/// through, and says by how much the millimetre is missed.
+#[test]
+fn spinning_cones_and_rounded_bodies_stay_within_a_centimetre_of_the_floor() {
+    let mut failures = Vec::new();
+    let mut worst: Vec<String> = Vec::new();
+    for floor in [Floor::Cuboid, Floor::ThinTriMesh] {
+        for mover in [Mover::Cone, Mover::RoundCylinder, Mover::RoundHull] {
+            for speed in [5.0, 50.0] {
+                for spin in [Vector::new(0.0, 0.0, 30.0), Vector::new(17.0, 17.0, 17.0)] {
+                    for hook_flags in [false, true] {
+                        let r = drop(floor, mover, speed, spin, hook_flags, 1.0);
+                        let case = format!(
+                            "{floor:?} {mover:?} {speed} m/s spin {spin} hooks {hook_flags}: {r:?}"
+                        );
+                        match r {
+                            Some(d) if d <= 1e-2 => {
+                                if d > 1e-3 {
+                                    worst.push(case);
+                                }
+                            }
+                            _ => failures.push(case),
+                        }
+                    }
+                }
+            }
+        }
+    }
+    println!("past a millimetre:\n{}", worst.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
