@@ -3,9 +3,11 @@
 //! tool's local contact model.
 
 use super::holding::attached_with_pose;
+use super::surface_set::AttachedSurface;
 use super::surface_set::{CouplingError, SurfaceSet};
 use crate::haptics::{positive_part, PatchVertex, ServoModel, WorldLink, MAX_PATCH};
 use crate::math::{Matrix, Pose, Real, Vector};
+use parry3d::bounding_volume::Aabb;
 use rapier3d::dynamics::RigidBodySet;
 use rapier3d::geometry::{ColliderHandle, ColliderSet, SharedShape};
 use rapier3d::pipeline::PhysicsWorld;
@@ -247,9 +249,11 @@ fn touched_stiffness(
     let margin = Vector::splat(1e-3 * size);
     let (lo, hi) = (aabb.mins - margin, aabb.maxs + margin);
     let mut k = 0.0;
+    let mut near = Vec::new();
     for (_, s, body) in attached_with_pose(&mut set.entries, world) {
+        candidates(s, &body, lo, hi, &mut near);
         let surface = &s.surface;
-        for i in 0..surface.num_vertices() as u32 {
+        for &i in &near {
             let p = body * surface.position(i);
             if p.cmpge(lo).all()
                 && p.cmple(hi).all()
@@ -277,9 +281,11 @@ fn patch_near(
         aabb.maxs + Vector::splat(reach),
     );
     let mut patch = Vec::new();
+    let mut near = Vec::new();
     for (_, s, body) in attached_with_pose(&mut set.entries, world) {
+        candidates(s, &body, lo, hi, &mut near);
         let surface = &s.surface;
-        for i in 0..surface.num_vertices() as u32 {
+        for &i in &near {
             let p = body * surface.position(i);
             if p.cmpge(lo).all() && p.cmple(hi).all() && !surface.is_pinned(i) {
                 patch.push(PatchVertex {
@@ -299,4 +305,16 @@ fn patch_near(
         patch.truncate(MAX_PATCH);
     }
     patch
+}
+
+/// The vertices of `s` that may lie in the world box `lo..hi` (its body at `body`): from the
+/// surface's contact-search BVH (the box taken into the body's frame), so that publishing a
+/// model costs the tool's neighbourhood, not the mesh; every vertex while the surface has no
+/// BVH yet (no tool has searched it).
+fn candidates(s: &mut AttachedSurface, body: &Pose, lo: Vector, hi: Vector, out: &mut Vec<u32>) {
+    let local = Aabb::new(lo, hi).transform_by(&body.inverse());
+    if !s.search.vertices_in(&local, out) {
+        out.clear();
+        out.extend(0..s.surface.num_vertices() as u32);
+    }
 }

@@ -80,6 +80,19 @@ impl ContactSearch {
         bvh.near_cached(cache, aabb, grow, triangles, &mut self.vertices);
     }
 
+    /// The vertices that may lie in `aabb` (the surface's frame) into `out`, from the BVH as
+    /// the last [`Self::refresh`] left it (each vertex within the slack of its leaf); `false`,
+    /// with `out` untouched, when there is no BVH yet.
+    pub fn vertices_in(&mut self, aabb: &Aabb, out: &mut Vec<u32>) -> bool {
+        match self.bvh.as_mut() {
+            Some(bvh) => {
+                bvh.vertices_in(aabb, out);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Forgets the caches of tools not in `tools`.
     pub fn retain_tools(&mut self, tools: impl Fn(ColliderHandle) -> bool) {
         self.caches.retain(|c| tools(c.0));

@@ -230,6 +230,64 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
 }
 
 #[test]
+fn the_patch_near_a_hovering_tool_is_every_vertex_near_it() {
+    // A ball pressed into a plate and lifted off while the plate swings back: out of contact,
+    // each published model's patch (taken from the contact search's BVH) must be exactly the
+    // unpinned vertices within one tool size of the tool's box, found here by brute force.
+    let (mut world, mut set, tool, soft) =
+        plate_scene(0.3, 24, 400.0, 0.05, 4, SharedShape::ball(0.03));
+    let (world_end, _servo_end) = haptic_link();
+    set.connect_haptic(tool, world_end, &mut world).unwrap();
+    let body = world.colliders[tool].parent().unwrap();
+    let (mut compared, mut nonempty) = (0, 0);
+    for step in 0..120 {
+        // Down 2 cm into the plate over half a second, then up to 1-3 cm above it, sideways.
+        let t = step as f32 / 60.0;
+        let y = if t < 0.5 {
+            0.03 - 0.04 * t
+        } else {
+            0.04 + 0.02 * (t - 0.5)
+        };
+        let x = 0.04 * (t - 0.5).max(0.0);
+        world.bodies[body].set_next_kinematic_translation(Vector::new(x, y, 0.0));
+        set.step(&mut world);
+        let model = set.haptic_model(tool).unwrap();
+        if model.in_contact() {
+            continue;
+        }
+        let co = &world.colliders[tool];
+        let aabb = co.compute_aabb();
+        let reach = co.shape().compute_local_aabb().half_extents().max_element();
+        let (lo, hi) = (
+            aabb.mins - Vector::splat(reach),
+            aabb.maxs + Vector::splat(reach),
+        );
+        let surface = &set.get(soft).unwrap().surface;
+        // Bitwise, with -0 and +0 as one (the model's positions went through the body's pose).
+        let key = |p: Vector| {
+            let p = p + Vector::ZERO;
+            (p.x.to_bits(), p.y.to_bits(), p.z.to_bits())
+        };
+        let mut expected: Vec<_> = (0..surface.num_vertices() as u32)
+            .filter(|&i| !surface.is_pinned(i))
+            .map(|i| surface.position(i))
+            .filter(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+            .map(key)
+            .collect();
+        let mut got: Vec<_> = model.patch.iter().map(|v| key(v.position)).collect();
+        expected.sort_unstable();
+        got.sort_unstable();
+        assert_eq!(got, expected, "step {step}");
+        compared += 1;
+        nonempty += usize::from(!got.is_empty());
+    }
+    assert!(
+        compared > 20 && nonempty > 10,
+        "{compared} compared, {nonempty} with vertices"
+    );
+}
+
+#[test]
 fn the_proxy_rests_where_the_coupling_and_the_model_balance() {
     // A contact at the origin pushing 3 N up, stiff 400 N/m along y and 100 N/m along x;
     // the device 2 cm below it and 1 cm aside, a 2 kN/m coupling.
