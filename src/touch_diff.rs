@@ -10,6 +10,8 @@ use std::hash::Hash;
 pub(crate) struct TouchDiff<K, E> {
     touching: HashSet<K>,
     events: Vec<E>,
+    /// The set before last, emptied, for the caller to fill next ([`TouchDiff::take_spare`]).
+    spare: HashSet<K>,
 }
 
 impl<K, E> Default for TouchDiff<K, E> {
@@ -17,6 +19,7 @@ impl<K, E> Default for TouchDiff<K, E> {
         Self {
             touching: HashSet::default(),
             events: Vec::new(),
+            spare: HashSet::default(),
         }
     }
 }
@@ -37,7 +40,15 @@ impl<K: Copy + Eq + Hash, E> TouchDiff<K, E> {
         new.sort_unstable_by_key(&order);
         self.events.extend(gone.into_iter().map(stopped));
         self.events.extend(new.into_iter().map(started));
-        self.touching = now;
+        self.spare = std::mem::replace(&mut self.touching, now);
+        self.spare.clear();
+    }
+
+    /// An empty set with the capacity of an earlier one, to fill with the pairs touching now
+    /// and hand to [`TouchDiff::update`] (a set of every touching pair built anew each step
+    /// grows and rehashes every time).
+    pub fn take_spare(&mut self) -> HashSet<K> {
+        std::mem::take(&mut self.spare)
     }
 
     /// The events since the last drain, oldest first.

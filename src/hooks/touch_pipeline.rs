@@ -203,6 +203,9 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     refused: HashMap<ColliderHandle, (usize, TouchMeshError)>,
     /// Touch started / ended per pair ([`TouchPipeline::drain_touch_events`]).
     touch: PairTracker,
+    /// The last step's pose history, kept to be refilled (a map of every body collected anew
+    /// each step grew and rehashed every time: a tenth of the pyramid scene's touch step).
+    spare_poses: HashMap<RigidBodyHandle, Pose>,
 }
 
 impl<H: PhysicsHooks> std::fmt::Debug for TouchPipeline<H> {
@@ -256,6 +259,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             pair_states: HashMap::default(),
             refused: HashMap::default(),
             touch: PairTracker::default(),
+            spare_poses: HashMap::default(),
         }
     }
 
@@ -421,7 +425,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
 
         // Pose history: where every body starts this step.
-        let prev = bodies.iter().map(|(h, b)| (h, *b.position())).collect();
+        let mut prev = std::mem::take(&mut self.spare_poses);
+        prev.clear();
+        prev.extend(bodies.iter().map(|(h, b)| (h, *b.position())));
         self.hooks.begin_step();
         prev
     }
@@ -433,7 +439,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         world: &mut PhysicsWorld,
         prev: HashMap<RigidBodyHandle, Pose>,
     ) {
-        self.hooks.prev_poses = prev;
+        self.spare_poses = std::mem::replace(&mut self.hooks.prev_poses, prev);
 
         self.reports.clear();
         self.corrections = 0;
@@ -484,13 +490,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// and the pairs reported), compared with the last step's.
     fn record_touches(&mut self, world: &PhysicsWorld) {
         let meshes = &self.hooks.meshes;
-        let mut now: HashSet<(ColliderHandle, ColliderHandle)> = world
-            .narrow_phase
-            .contact_pairs()
-            .filter(|p| p.has_any_active_contact())
-            .filter(|p| meshes.contains_key(&p.collider1) || meshes.contains_key(&p.collider2))
-            .map(|p| events::ordered(p.collider1, p.collider2))
-            .collect();
+        let mut now = self.touch.take_spare();
+        now.extend(
+            world
+                .narrow_phase
+                .contact_pairs()
+                .filter(|p| p.has_any_active_contact())
+                .filter(|p| meshes.contains_key(&p.collider1) || meshes.contains_key(&p.collider2))
+                .map(|p| events::ordered(p.collider1, p.collider2)),
+        );
         now.extend(
             self.reports
                 .iter()
@@ -524,16 +532,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             .retain(|h, _| colliders.get(*h).is_some_and(|co| opted_in(h, co)));
         let meshes = &mut self.hooks.meshes;
         meshes.retain(|h, _| colliders.contains(*h));
-        // Colliders sharing one shape (rapier's `SharedShape` is an `Arc`) share one mesh.
-        let mut by_shape: HashMap<usize, Arc<TouchMesh>> = meshes
-            .values()
-            .map(|m| (m.shape_ptr, m.mesh.clone()))
-            .collect();
-        // Equal primitives in separate `Arc`s share one mesh too.
-        let mut by_key: HashMap<ShapeKey, Arc<TouchMesh>> = meshes
-            .values()
-            .filter_map(|m| Some((m.key.clone()?, m.mesh.clone())))
-            .collect();
+        // Colliders sharing one shape (rapier's `SharedShape` is an `Arc`) share one mesh;
+        // equal primitives in separate `Arc`s share one mesh too. Indexed only once a collider
+        // needs a mesh (most steps none does).
+        let mut index: Option<MeshIndex> = None;
         for (h, co) in colliders.iter() {
             if !opted_in(&h, co) {
                 meshes.remove(&h);
@@ -545,6 +547,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             {
                 continue;
             }
+            let (by_shape, by_key) = index.get_or_insert_with(|| {
+                (
+                    meshes
+                        .values()
+                        .map(|m| (m.shape_ptr, m.mesh.clone()))
+                        .collect(),
+                    meshes
+                        .values()
+                        .filter_map(|m| Some((m.key.clone()?, m.mesh.clone())))
+                        .collect(),
+                )
+            });
             let key = shape_key(co.shape());
             let built = match by_shape
                 .get(&ptr)
@@ -578,3 +592,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
     }
 }
+
+/// The touch meshes built so far, by shape address and by primitive key (sharing).
+type MeshIndex = (
+    HashMap<usize, Arc<TouchMesh>>,
+    HashMap<ShapeKey, Arc<TouchMesh>>,
+);
