@@ -182,6 +182,29 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 {
                                     continue;
                                 }
+                                // A dynamic partner that moved less than the pair's safe step
+                                // relative to this body is left to rapier's solver below
+                                // whatever its contact points say: not read (rapier's points of
+                                // every pair in a pile were most of the guard's time).
+                                let partner_body =
+                                    partner.parent().and_then(|pb| world.bodies.get(pb));
+                                if partner_body.is_some_and(|b| b.is_dynamic()) {
+                                    let Some(pm) = self.hooks.meshes.get(&ph) else {
+                                        continue;
+                                    };
+                                    let safe = match (mesh.min_extent(), pm.mesh.min_extent()) {
+                                        (a, b) if b > 0.0 => a.min(b),
+                                        (a, _) => a,
+                                    };
+                                    let dp = body_motion(
+                                        &self.hooks.prev_poses,
+                                        &world.bodies,
+                                        partner.parent(),
+                                    );
+                                    if (d - dp).length() < safe {
+                                        continue;
+                                    }
+                                }
                                 let view = read(ph, partner, Some(p));
                                 if !view.calm(&self.options) {
                                     restless.push((ph, Some(view)));
