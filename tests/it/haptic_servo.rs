@@ -680,6 +680,33 @@ proptest! {
     }
 }
 
+/// A case the property test above finds with another seed (`PROPTEST_RNG_SEED=7`), kept here
+/// rather than in its replayed regressions because it fails: the passivity controller on, the
+/// update ramp off, a 0.3 m plate of 1783 N/m and 1 kg, a ball. The rendering gives the hand
+/// 0.0327 J while its damping takes 0.0094 J (the same before this stop's changes). The
+/// controller's own books (work given back less the sampled spring's `k Δx² / 2`) and the
+/// hand's (its damping while in contact) disagree here; not yet understood (issue 14).
+#[test]
+#[ignore = "known failure of the passivity controller, issue 14"]
+fn a_stiff_light_plate_under_an_irregular_world_gives_the_hand_no_energy() {
+    let r = slow_world_run_on(
+        false,
+        SlowScene {
+            scale: 1.0,
+            k: 1783.4238,
+            mass: 1.0,
+            tool: SharedShape::ball(0.03),
+            seed: 3_849_037_425,
+        },
+    );
+    assert!(
+        r.rendered_work <= r.contact_loss + 1e-9,
+        "the rendering gave the hand {} J, its damping took {} J",
+        r.rendered_work,
+        r.contact_loss
+    );
+}
+
 #[test]
 fn a_hand_striking_a_fine_damped_plate_comes_to_rest_on_it() {
     // The 100,000-node plate of the servo bench (edges of 100 N/m with 1 N·s/m dampers, on
