@@ -40,7 +40,7 @@
 //!   damping) and sooner with the update ramp on (1602 N/m, 1 kg: 0.053 J against
 //!   0.020 J). With it those cases and the property test pass
 //!   (`tests/it/haptic_servo.rs`), but not every case: with another seed the property test
-//!   finds a 1783 N/m, 1 kg plate where the hand still gets 0.033 J against 0.0094 J taken
+//!   finds a 1783 N/m, 1 kg plate where the hand still gets 0.026 J against 0.016 J taken
 //!   by its damping (kept as an ignored test). Its price: once the loop
 //!   has given back more than it got (a fast strike on a damped surface whose dampers' force
 //!   arrives a step late), the push along the hand's motion stays cut until the hand pays it

@@ -44,10 +44,11 @@ use std::time::{Duration, Instant};
 /// A passivity controller ([`Servo::set_passivity`], off by default; Hannaford and Ryu 2002)
 /// bounds the whole rendering, not only the ramp: an observer books the work of the rendered
 /// force on the device since the loop started, less the give-back a sampled spring makes of
-/// its own accord (`k Δx² / 2` per tick, which the device's damping absorbs under
-/// [`VirtualCoupling::max_passive_stiffness`]); while the loop has given more than that, the
-/// part of the force pushing along the device's motion shrinks by what pays the deficit back,
-/// never past zero (a damper from a lagging velocity estimate pushed hands that turned back).
+/// its own accord (`k Δx² / 2` per tick while it renders a force, which the device's damping
+/// absorbs under [`VirtualCoupling::max_passive_stiffness`]); while the loop has given more
+/// than that, the part of the force pushing along the device's motion shrinks by what pays
+/// the deficit back, never past zero (a damper from a lagging velocity estimate pushed hands
+/// that turned back).
 pub struct Servo<D: HapticDevice> {
     device: D,
     link: ServoLink,
@@ -195,9 +196,10 @@ impl<D: HapticDevice> Servo<D> {
     /// The passivity controller (Hannaford and Ryu 2002): the observer books the work of
     /// the rendered force on the device since the loop started, less the give-back a sampled
     /// spring makes of its own accord and the device's damping absorbs under the coupling's
-    /// passive stiffness (`k Δx² / 2` per tick). When the loop has given the hand more than
-    /// that (a deficit), the part of `force` pushing along the device's motion (`dv`, held
-    /// over the next tick) shrinks by what would pay the deficit back, never past zero.
+    /// passive stiffness (`k Δx² / 2` per tick that renders a force). When the loop has given
+    /// the hand more than that (a deficit), the part of `force` pushing along the device's
+    /// motion (`dv`, held over the next tick) shrinks by what would pay the deficit back,
+    /// never past zero.
     fn pay_back_deficit(&self, force: Vector, dv: Vector) -> Vector {
         let step = dv * self.period;
         let len2 = step.length_squared() as f64;
@@ -301,8 +303,12 @@ impl<D: HapticDevice> Servo<D> {
             let work = l.force.dot(moved) as f64;
             self.reserve -= work;
             self.observed -= work;
-            self.observed +=
-                0.5 * self.coupling.stiffness.max(0.0) as f64 * moved.length_squared() as f64;
+            // Only a spring that renders a force gives anything back: out of contact the
+            // allowance would pile up credit for the next contact to spend.
+            if l.force != Vector::ZERO {
+                self.observed +=
+                    0.5 * self.coupling.stiffness.max(0.0) as f64 * moved.length_squared() as f64;
+            }
             if !self.observed.is_finite() {
                 self.observed = 0.0;
             }
