@@ -235,70 +235,46 @@ impl MassSpringSurface {
         for i in 0..m {
             a[(i, i)] += 1e-12 * scale;
         }
-        // Positions: presses only push; one with a negative depth (a speculative contact short
-        // of its holder) or that the others' pushes satisfy is left out.
-        let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
-        let tol = 1e-9 * depth.amax();
-        let solved = solve_pushing(
-            &a,
-            &depth,
-            |_| true,
-            |i| depth[i] > 0.0,
-            tol,
-            &mut scratch.factor,
-        );
-        let Some((mu, active)) = solved else {
-            give_back(&mut scratch.system, a);
-            self.pushing.scratch = scratch;
-            return Ok(out.iter().map(|_| None).collect());
-        };
-        // Velocities: the pushing presses get their holder's normal velocity, by impulses that
-        // only push (a point already leaving its holder faster keeps its velocity).
-        let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
-        let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
-        let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
-        let vtol = 1e-9 * (1.0 + dv.amax());
-        let solved = solve_pushing(
-            &sub,
-            &dv,
-            |_| true,
-            |i| dv[i] > 0.0,
-            vtol,
-            &mut scratch.factor,
-        );
-        let Some((nu, _)) = solved else {
-            give_back(&mut scratch.system, a);
-            self.pushing.scratch = scratch;
-            return Ok(out.iter().map(|_| None).collect());
-        };
-        for (r, &i) in rows.iter().enumerate() {
-            let hold = &mut kept[i].0;
-            // The impulse the press gave: the start of what the hold reports.
-            hold.impulse = nu[r];
-            for (v, w) in hold.entries() {
-                let share = w * inv_mass(self, v);
-                self.pos[v as usize] += hold.normal * (share * mu[i]);
-                motion_watch::note(&mut self.watch, v as usize, self.pos[v as usize]);
-                self.vel[v as usize] += hold.normal * (share * nu[r]);
+        let solved = solve_presses(&a, &kept, &mut scratch.factor);
+        if let Some(PressImpulses {
+            mu,
+            active,
+            rows,
+            nu,
+        }) = &solved
+        {
+            for (r, &i) in rows.iter().enumerate() {
+                let hold = &mut kept[i].0;
+                // The impulse the press gave: the start of what the hold reports.
+                hold.impulse = nu[r];
+                for (v, w) in hold.entries() {
+                    let share = w * inv_mass(self, v);
+                    self.pos[v as usize] += hold.normal * (share * mu[i]);
+                    motion_watch::note(&mut self.watch, v as usize, self.pos[v as usize]);
+                    self.vel[v as usize] += hold.normal * (share * nu[r]);
+                }
             }
-        }
-        // A press left out is `gap` short of its holder (its own negative depth, or where the
-        // others' pushes put it): it is held as a speculative contact that may close the gap
-        // over the next step, not more.
-        for (i, k) in kept.iter_mut().enumerate() {
-            if active[i] {
-                continue;
+            // A press left out is `gap` short of its holder (its own negative depth, or where
+            // the others' pushes put it): it is held as a speculative contact that may close
+            // the gap over the next step, not more.
+            for (i, k) in kept.iter_mut().enumerate() {
+                if active[i] {
+                    continue;
+                }
+                let gap = (a.row(i).dot(&mu.transpose()) - k.1).max(0.0);
+                let velocity: f64 =
+                    k.0.entries()
+                        .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
+                        .sum();
+                // The holder's velocity, as given, is the current point velocity plus `k.2`.
+                k.0.min_velocity = velocity + k.2 - gap / self.dt;
             }
-            let gap = (a.row(i).dot(&mu.transpose()) - k.1).max(0.0);
-            let velocity: f64 =
-                k.0.entries()
-                    .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
-                    .sum();
-            // The holder's velocity, as given, is the current point velocity plus `k.2`.
-            k.0.min_velocity = velocity + k.2 - gap / self.dt;
         }
         give_back(&mut scratch.system, a);
         self.pushing.scratch = scratch;
+        if solved.is_none() {
+            return Ok(out.iter().map(|_| None).collect());
+        }
         self.point_holds.extend(kept.into_iter().map(|(h, _, _)| h));
         Ok(out)
     }
@@ -352,6 +328,45 @@ impl MassSpringSurface {
     pub fn num_point_holds(&self) -> usize {
         self.point_holds.len()
     }
+}
+
+/// What the presses' solves give (see [`solve_presses`]).
+struct PressImpulses {
+    /// Position impulse per press (zero on those left out).
+    mu: nalgebra::DVector<f64>,
+    /// Which presses push.
+    active: Vec<bool>,
+    /// The pushing presses, and their velocity impulses in that order.
+    rows: Vec<usize>,
+    nu: nalgebra::DVector<f64>,
+}
+
+/// The presses' solves over `a = J M⁻¹ Jᵀ` (`kept`: each press with its depth and the normal
+/// velocity its holder asks for): position impulses, push-only, then, for the presses that
+/// push, velocity impulses that bring them to their holders' normal velocity, again push-only
+/// (a point already leaving its holder faster keeps its velocity). `None` when a solve fails.
+fn solve_presses(
+    a: &nalgebra::DMatrix<f64>,
+    kept: &[(PointHold, f64, f64)],
+    factor: &mut Vec<f64>,
+) -> Option<PressImpulses> {
+    let m = kept.len();
+    // Positions: presses only push; one with a negative depth (a speculative contact short
+    // of its holder) or that the others' pushes satisfy is left out.
+    let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
+    let tol = 1e-9 * depth.amax();
+    let (mu, active) = solve_pushing(a, &depth, |_| true, |i| depth[i] > 0.0, tol, factor)?;
+    let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
+    let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
+    let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
+    let vtol = 1e-9 * (1.0 + dv.amax());
+    let (nu, _) = solve_pushing(&sub, &dv, |_| true, |i| dv[i] > 0.0, vtol, factor)?;
+    Some(PressImpulses {
+        mu,
+        active,
+        rows,
+        nu,
+    })
 }
 
 /// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
