@@ -2,7 +2,7 @@
 //! went through something) back to first touch; then the moved bodies' colliders are synced
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
-use super::pair_view::{collider_reach, push_out, PairState, PairView};
+use super::pair_view::{collider_reach, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{collider_pose_now, rapier_contact_of, rapier_normal, supported};
 use super::*;
@@ -192,10 +192,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     let Some(pm) = self.hooks.meshes.get(&ph) else {
                                         continue;
                                     };
-                                    let safe = match (mesh.min_extent(), pm.mesh.min_extent()) {
-                                        (a, b) if b > 0.0 => a.min(b),
-                                        (a, _) => a,
-                                    };
+                                    let safe = safe_step(&mesh, &pm.mesh);
                                     let dp = body_motion(
                                         &self.hooks.prev_poses,
                                         &world.bodies,
@@ -260,10 +257,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             read(ph, partner, world.narrow_phase.contact_pair(ph, ch))
                         });
                         let overlapped = rapier.is_some_and(|r| r.in_contact_at_start);
-                        let safe = match (mesh.min_extent(), partner_mesh.min_extent()) {
-                            (a, b) if b > 0.0 => a.min(b),
-                            (a, _) => a,
-                        };
+                        let safe = safe_step(&mesh, &partner_mesh);
                         let may_tunnel = (d - dp).length() >= safe;
                         // Two dynamic bodies rapier already had in contact when the step began
                         // (its manifold holds points for them) that moved less than their safe

@@ -53,6 +53,16 @@ impl PairView {
     }
 }
 
+/// The relative motion over one step under which two bodies cannot have passed through each
+/// other: the smaller of their touch meshes' thinnest extents (a flat partner, of zero extent,
+/// counts as the mover's).
+pub(super) fn safe_step(mesh: &TouchMesh, partner_mesh: &TouchMesh) -> Real {
+    match (mesh.min_extent(), partner_mesh.min_extent()) {
+        (a, b) if b > 0.0 => a.min(b),
+        (a, _) => a,
+    }
+}
+
 /// The way out of an overlap along `out` (a world direction out of the partner) for the mover
 /// at its pose now: on the shapes themselves when the pair is `curved`
 /// ([`Reconstructor::push_out_shapes`]), by the exact method on the touch meshes otherwise
