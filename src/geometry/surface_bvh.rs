@@ -9,9 +9,9 @@
 //! to the root ([`Bvh::refit_partial`]). A query then costs the tree's depth and the candidates
 //! it returns, not the mesh. A tool asks about much the same place substep after substep:
 //! [`SurfaceBvh::near_cached`] walks a grown box once and then only looks at the leaves changed
-//! since. At 100,000 nodes and six cubes, 38-49 µs per substep for every cube's candidates
-//! (36 µs at 10,000 nodes) where the scans over every vertex and every triangle's bounds took
-//! 3.2 ms (`cargo bench --bench coupled_step -- 6cubes_1khz`).
+//! since. At 100,000 nodes and six cubes, 27-49 µs per substep for every cube's candidates
+//! over four runs (22-36 µs at 10,000 nodes) where the scans over every vertex and every
+//! triangle's bounds took 3.2 ms (`cargo bench --bench coupled_step -- 6cubes_1khz`).
 
 use crate::math::{Real, Vector};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
