@@ -2,6 +2,7 @@
 
 use super::{DeviceState, HapticDevice, HapticsError};
 use crate::math::{Pose, Real, Vector};
+use glamx::DVec3;
 
 /// A hand holding a device's end effector: a point mass (hand and handle) pulled along a
 /// scripted trajectory by a spring and damper (the arm), slowed by the device's own physical
@@ -38,9 +39,9 @@ pub struct SimulatedHand {
     pub device_damping: Real,
     trajectory: Box<dyn Fn(Real) -> Pose + Send>,
     dt: Real,
-    t: Real,
-    x: Vector,
-    v: Vector,
+    t: f64,
+    x: DVec3,
+    v: DVec3,
     force: Vector,
     buttons: u32,
     rendered_work: f64,
@@ -87,8 +88,8 @@ impl SimulatedHand {
             trajectory: Box::new(trajectory),
             dt: 1.0 / rate_hz,
             t: 0.0,
-            x: start.translation,
-            v: Vector::ZERO,
+            x: start.translation.as_dvec3(),
+            v: DVec3::ZERO,
             force: Vector::ZERO,
             buttons: 0,
             rendered_work: 0.0,
@@ -101,23 +102,27 @@ impl SimulatedHand {
     /// the continuous hand it stands for (so a held force does the work it does on a real
     /// device). A non-finite trajectory point leaves the arm where it was.
     pub fn step(&mut self) {
-        let h = self.dt / Self::SUBSTEPS as Real;
-        let mass = self.mass.max(1e-9);
-        let mut before = (self.trajectory)(self.t).translation;
+        // In f64: a sub-micrometre step added to a position of centimetres in f32 rounds by a
+        // percent, and the books drifted from the motion the device reports.
+        let h = self.dt as f64 / Self::SUBSTEPS as f64;
+        let mass = self.mass.max(1e-9) as f64;
+        let force = self.force.as_dvec3();
+        let target_at = |t: f64| (self.trajectory)(t as Real).translation.as_dvec3();
+        let mut before = target_at(self.t);
         for _ in 0..Self::SUBSTEPS {
-            let next = (self.trajectory)(self.t + h).translation;
+            let next = target_at(self.t + h);
             let (target, target_v) = if next.is_finite() && before.is_finite() {
                 (next, (next - before) / h)
             } else {
-                (self.x, Vector::ZERO)
+                (self.x, DVec3::ZERO)
             };
-            let arm =
-                (target - self.x) * self.arm_stiffness + (target_v - self.v) * self.arm_damping;
-            let damping = -self.v * self.device_damping;
-            self.v += (arm + damping + self.force) * (h / mass);
+            let arm = (target - self.x) * self.arm_stiffness as f64
+                + (target_v - self.v) * self.arm_damping as f64;
+            let damping = -self.v * self.device_damping as f64;
+            self.v += (arm + damping + force) * (h / mass);
             let step = self.v * h;
-            self.rendered_work += self.force.dot(step) as f64;
-            self.damping_loss += (self.device_damping * self.v.length_squared() * h) as f64;
+            self.rendered_work += force.dot(step);
+            self.damping_loss += self.device_damping as f64 * self.v.length_squared() * h;
             self.x += step;
             self.t += h;
             before = next;
@@ -126,12 +131,12 @@ impl SimulatedHand {
 
     /// Time (s).
     pub fn time(&self) -> Real {
-        self.t
+        self.t as Real
     }
 
     /// The hand's velocity (device frame).
     pub fn velocity(&self) -> Vector {
-        self.v
+        self.v.as_vec3()
     }
 
     /// Presses buttons (a bit each) from now on.
@@ -154,7 +159,7 @@ impl SimulatedHand {
 impl HapticDevice for SimulatedHand {
     fn state(&mut self) -> DeviceState {
         DeviceState {
-            pose: Pose::from_parts(self.x, (self.trajectory)(self.t).rotation),
+            pose: Pose::from_parts(self.x.as_vec3(), (self.trajectory)(self.t as Real).rotation),
             buttons: self.buttons,
         }
     }

@@ -41,14 +41,13 @@ use std::time::{Duration, Instant};
 /// fades out faster (to 1 % in 90 ticks). Pressing in, the hand does the work: an offset
 /// that eases a press in is not booked.
 ///
-/// A passivity controller ([`Servo::set_passivity`], off by default; Hannaford and Ryu 2002)
-/// bounds the whole rendering, not only the ramp: an observer books the work of the rendered
-/// force on the device since the loop started, less the give-back a sampled spring makes of
-/// its own accord (`k Δx² / 2` per tick while it renders a force, which the device's damping
-/// absorbs under [`VirtualCoupling::max_passive_stiffness`]); while the loop has given more
-/// than that, the part of the force pushing along the device's motion shrinks by what pays
-/// the deficit back, never past zero (a damper from a lagging velocity estimate pushed hands
-/// that turned back).
+/// A passivity controller ([`Servo::set_passivity`], on by default) bounds the whole
+/// rendering, not only the ramp: after the device's move the proxy goes toward where the model
+/// puts it only as far as keeps the energy the proxy's moves have drawn into the coupling
+/// spring since the contact began at or below zero. Over a contact
+/// the hand then gets at most the sampled spring's give-back (`k Δx² / 2` per tick), which
+/// the device's damping absorbs under [`VirtualCoupling::max_passive_stiffness`]. The bound
+/// is exact, not a prediction of the device's next move.
 pub struct Servo<D: HapticDevice> {
     device: D,
     link: ServoLink,
@@ -72,10 +71,10 @@ pub struct Servo<D: HapticDevice> {
     reserve: f64,
     offset_work: f64,
     /// Whether the passivity controller is on ([`Servo::set_passivity`]), and the energy the
-    /// hand has put into the loop since it started, less the sampled spring's own give-back
-    /// (J; the passivity observer).
+    /// proxy's moves have drawn into the coupling spring since the contact began (J, held at
+    /// or below zero; the passivity observer, [`Servo::bound_proxy`]).
     passivity: bool,
-    observed: f64,
+    drawn: f64,
 }
 
 impl<D: HapticDevice> std::fmt::Debug for Servo<D> {
@@ -138,8 +137,8 @@ impl<D: HapticDevice> Servo<D> {
             ramp: true,
             reserve: 0.0,
             offset_work: 0.0,
-            passivity: false,
-            observed: 0.0,
+            passivity: true,
+            drawn: 0.0,
         })
     }
 
@@ -193,40 +192,94 @@ impl<D: HapticDevice> Servo<D> {
         };
     }
 
-    /// The passivity controller (Hannaford and Ryu 2002): the observer books the work of
-    /// the rendered force on the device since the loop started, less the give-back a sampled
-    /// spring makes of its own accord and the device's damping absorbs under the coupling's
-    /// passive stiffness (`k Δx² / 2` per tick that renders a force). When the loop has given
-    /// the hand more than that (a deficit), the part of `force` pushing along the device's
-    /// motion (`dv`, held over the next tick) shrinks by what would pay the deficit back,
-    /// never past zero.
-    fn pay_back_deficit(&self, force: Vector, dv: Vector) -> Vector {
-        let step = dv * self.period;
-        let len2 = step.length_squared() as f64;
-        let work = force.dot(step) as f64;
-        let deficit = -self.observed;
-        if !(deficit > 0.0 && len2 > 0.0 && len2.is_finite() && work > 0.0 && work.is_finite()) {
-            return force;
-        }
-        // Only the push along the motion shrinks, by no more than the deficit and never past
-        // zero: a damper from a lagging velocity estimate would push a hand that turned back.
-        let cut = (deficit.min(work) / len2) as Real;
-        let limited = force - step * cut;
-        if limited.is_finite() {
-            limited
-        } else {
-            Vector::ZERO
+    /// The coupling spring's energy (J) with the device at `x` and the proxy at `p`.
+    fn spring_energy(&self, x: Vector, p: Vector) -> f64 {
+        0.5 * self.coupling.stiffness.max(0.0) as f64 * (p - x).length_squared() as f64
+    }
+
+    /// The passivity observer's hand phase: the device moved from the last tick's position to
+    /// `x` under the last tick's force, its proxy held. For the coupling's spring alone that
+    /// force's work is exactly what the spring's energy lost plus the sampled spring's
+    /// give-back `k Δx² / 2` (which the device's damping absorbs under
+    /// [`VirtualCoupling::max_passive_stiffness`]); what the damper or the force bound did
+    /// beyond that is booked.
+    fn observe_hand_move(&mut self, last: LastTick, x: Vector) {
+        let moved = x - last.device;
+        let work = last.force.dot(moved) as f64;
+        let residual = work + self.spring_energy(x, last.proxy)
+            - self.spring_energy(last.device, last.proxy)
+            - self.spring_energy(moved, Vector::ZERO);
+        self.drawn += residual;
+        if !self.drawn.is_finite() {
+            self.drawn = 0.0;
         }
     }
 
-    /// Switches the passivity controller on or off (off by default; the type's docs). On,
-    /// the loop never gives the hand, since it started, more work than the hand put in (one
-    /// tick's prediction aside): a world whose forces arrive late or eased in cannot pump
-    /// energy into the hand. The price: after the loop has given back more than it got (a
-    /// fast strike on a damped surface whose dampers' force arrived a step late), the push
-    /// along the hand's motion stays cut until the hand pays that back, and a hand resting
-    /// there feels less than the surface's force (measured: 1.0 N against 1.7 N on the servo
-    /// bench's 100,000-node plate).
+    /// The passivity controller's proxy phase: the proxy goes from where it was toward the
+    /// `candidate` (where the model puts it, with the surfaces' force `surface_force`) only
+    /// as far as keeps the energy the proxy's moves have drawn into the coupling spring
+    /// since the contact began at or below zero. Returns the proxy and the surfaces' force
+    /// there. Out of contact (the candidate is the device `x`) nothing is drawn and the
+    /// account restarts.
+    ///
+    /// Why it bounds the whole rendering: split a tick into the device's move (proxy held)
+    /// and the proxy's move (device held). In the first the spring's work on the device is
+    /// what its energy lost plus the sampled give-back; in the second it does no work on the
+    /// device. Over a contact, then, the device gets the give-back plus what the proxy's
+    /// moves drew in, which this keeps at or below zero. Under a fixed elastic model a proxy
+    /// resting where the model puts it draws in minus what the surface stores, never above
+    /// zero, so the bound acts only on what a model that changes under the tool (a world
+    /// update, an eased-in offset, a damper's late force) would give. It is exact, not a
+    /// prediction of the device's next move.
+    fn bound_proxy(
+        &mut self,
+        x: Vector,
+        candidate: Vector,
+        surface_force: Vector,
+    ) -> (Vector, Vector) {
+        if !(x.is_finite() && candidate.is_finite()) {
+            return (candidate, surface_force);
+        }
+        if candidate == x {
+            // Out of contact (the proxy is the device): the spring holds nothing, and the
+            // account restarts.
+            self.drawn = 0.0;
+            return (candidate, surface_force);
+        }
+        // After a tick that read no device position (a dropped frame) the spring held
+        // nothing: the proxy starts again from the device, with what the contact banked.
+        let held = self.last.map_or(x, |l| l.proxy);
+        let before = self.spring_energy(x, held);
+        let after = self.spring_energy(x, candidate);
+        let cap = (before - self.drawn).max(0.0);
+        if after <= cap {
+            self.drawn += after - before;
+            return (candidate, surface_force);
+        }
+        // As far from the held proxy toward the candidate as the bound allows: the tool stays
+        // where the world has it rather than being pulled onto the device (where, held on the
+        // device with nothing banked, it would render nothing until the contact ended). When
+        // even the held proxy is over the bound (a damper's work booked), toward the device.
+        let k = self.coupling.stiffness.max(0.0) as f64;
+        let bounded = match toward_within(held - x, candidate - held, 2.0 * cap / k) {
+            Some(s) => held + (candidate - held) * s,
+            None => x + (candidate - x) * (cap / after).sqrt() as Real,
+        };
+        let bounded = if bounded.is_finite() { bounded } else { x };
+        self.drawn += self.spring_energy(x, bounded) - before;
+        (bounded, self.model_at(bounded).0)
+    }
+
+    /// Switches the passivity controller on or off (on by default; the type's docs). On, the loop never gives the hand more than the sampled
+    /// coupling spring's give-back over a contact, whatever the world's forces do (a model
+    /// that changes under the tool, an eased-in offset, a damper's late force). Its price: a
+    /// device that starts inside a surface, or a surface the world moves onto a device that
+    /// holds still (pushed by another tool, animated), renders nothing until the device
+    /// presses on, since it has put no energy in; and where the model would push the proxy
+    /// out with energy the device never put in, the proxy (and the tool, which the world
+    /// moves to it) stays where it was and the device feels the coupling's stiffness there.
+    /// Off, the rendering is the model's, and a property test finds worlds that pump energy
+    /// into the hand (`tests/it/haptic_servo.rs`: 209 J given against 48 J damped).
     pub fn set_passivity(&mut self, on: bool) {
         self.passivity = on;
     }
@@ -282,6 +335,16 @@ impl<D: HapticDevice> Servo<D> {
                 }
             }
         }
+        if let Some(l) = self.last {
+            let work = l.force.dot(x - l.device) as f64;
+            self.reserve -= work;
+            if self.passivity && x.is_finite() {
+                self.observe_hand_move(l, x);
+            }
+        }
+        if self.passivity {
+            (proxy, surface_force) = self.bound_proxy(x, proxy, surface_force);
+        }
         let (dv, pv) = match self.last {
             Some(l) => (
                 (x - l.device) / self.period,
@@ -294,35 +357,11 @@ impl<D: HapticDevice> Servo<D> {
         } else {
             Vector::ZERO
         };
-        if let Some(l) = self.last {
-            // The work the last tick's force, held over the tick, did on the device. A spring
-            // sampled and held gives back up to `k Δx² / 2` per tick of its own accord, which
-            // the device's damping absorbs under the coupling's passive stiffness: that much
-            // is not charged to the passivity controller.
-            let moved = x - l.device;
-            let work = l.force.dot(moved) as f64;
-            self.reserve -= work;
-            self.observed -= work;
-            // Only a spring that renders a force gives anything back: out of contact the
-            // allowance would pile up credit for the next contact to spend.
-            if l.force != Vector::ZERO {
-                self.observed +=
-                    0.5 * self.coupling.stiffness.max(0.0) as f64 * moved.length_squared() as f64;
-            }
-            if !self.observed.is_finite() {
-                self.observed = 0.0;
-            }
-        }
         if surface_force == Vector::ZERO || !self.reserve.is_finite() {
             // Out of contact the surfaces hold nothing for the hand.
             self.reserve = 0.0;
             self.offset_work = 0.0;
         }
-        let force = if self.passivity {
-            self.pay_back_deficit(force, dv)
-        } else {
-            force
-        };
         self.device.set_force(workspace.force_to_device(force));
         self.device.end_tick();
         self.last = Some(LastTick {
@@ -390,6 +429,22 @@ impl<D: HapticDevice + 'static> Servo<D> {
             handle: Some(handle),
         }
     }
+}
+
+/// The largest `s` in `[0, 1]` with `|d + s e|² <= r2` (`d`: from the device to the held
+/// proxy, `e`: from the held proxy to the candidate), or `None` when `s = 0` is already over.
+fn toward_within(d: Vector, e: Vector, r2: f64) -> Option<Real> {
+    let (d, e) = (d.as_dvec3(), e.as_dvec3());
+    let c = d.length_squared() - r2;
+    if c.is_nan() || c > 0.0 {
+        return None;
+    }
+    let (a, b) = (e.length_squared(), d.dot(e));
+    if a <= 0.0 {
+        return Some(0.0);
+    }
+    let s = (-b + (b * b - a * c).max(0.0).sqrt()) / a;
+    Some(s.clamp(0.0, 1.0) as Real)
 }
 
 /// One recorded tick.
