@@ -24,10 +24,17 @@ use std::time::{Duration, Instant};
 
 const RATE: f32 = 5000.0;
 
-/// A hand held at tool `k`'s pressed pose (the script at 1.8 s: pressed, not yet dragging).
+/// A hand that presses tool `k` in from where it starts to its pressed pose (the script at
+/// 1.8 s: pressed, not yet dragging) in half a second and holds it there. It presses in from
+/// outside: a hand that started inside the plate would have put no energy in, and the
+/// passivity controller would render it nothing.
 fn pressed_servo(scene: &HapticScene, k: usize, link: ServoLink) -> Servo<SimulatedHand> {
-    let pose = scene.script(k)(1.8);
-    let hand = SimulatedHand::new(RATE, move |_| pose).expect("a hand");
+    let (start, pose) = (scene.script(k)(0.0), scene.script(k)(1.8));
+    let hand = SimulatedHand::new(RATE, move |t| {
+        let s = (t / 0.5).min(1.0);
+        rapier_touch::prelude::Pose::from_translation(start.translation.lerp(pose.translation, s))
+    })
+    .expect("a hand");
     let coupling = VirtualCoupling {
         stiffness: 0.5 * VirtualCoupling::max_passive_stiffness(RATE, hand.device_damping),
         damping: 0.0,
