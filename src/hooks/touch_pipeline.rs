@@ -84,8 +84,12 @@ pub struct TouchOptions {
     /// the depth the pair had when the step began, so a tumbling or pressed body never digs
     /// further into the floor, while rapier's steady overlap under a tall pile is left alone.
     /// Resting pairs of two dynamic bodies (a stack, whose soft contacts rapier lets overlap by
-    /// about a millimetre) are left to rapier. Default `9e-4` m: above rapier's usual resting
-    /// overlap, below the 1 mm a user sees. Range `slop ..= 0.01`.
+    /// about a millimetre, and by several under a tall pile) are left to rapier. A still body
+    /// in contact with another dynamic body (in a pile) on a convex floor gets ten times this
+    /// slop: held harder against the floor than the pile's bodies hold each other, the bottom
+    /// of a pile was pushed into the body above each step and the pile's compression went
+    /// there. Default `9e-4` m: above rapier's usual resting overlap, below the 1 mm a user
+    /// sees. Range `slop ..= 0.01`.
     pub resting_slop: Real,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,

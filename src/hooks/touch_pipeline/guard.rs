@@ -4,8 +4,16 @@
 
 use super::pair_view::{collider_reach, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
-use super::rapier_contacts::{collider_pose_now, rapier_contact_of, rapier_normal, supported};
+use super::rapier_contacts::{
+    collider_pose_now, in_pile, rapier_contact_of, rapier_normal, supported,
+};
 use super::*;
+
+/// The resting slop of a body that rests in a pile on a convex floor, in resting slops
+/// ([`TouchOptions::resting_slop`]): 9 mm at the default, above the 6.5 mm rapier's soft
+/// contacts let the two lowest planks of its plank tower overlap, far from letting a pile
+/// drive a body through a floor.
+const PILE_SLOP: Real = 10.0;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
@@ -271,9 +279,28 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         }
                         // (A pair that moved farther is measured on its own path below.)
                         let resting = rapier.filter(|_| overlapped && trusted);
+                        // A still body in a pile, resting on a convex floor, rests in it as deep
+                        // as rapier lets the pile's own contacts sink (`PILE_SLOP`): held harder
+                        // against the floor than its neighbours hold each other, the bottom of a
+                        // pile was pushed out each step into the body above, and the pile's
+                        // compression went there (rapier's plank tower: 11.4 mm between the two
+                        // lowest planks against 6.5 mm in vanilla rapier). Not on a TriMesh or
+                        // other composite floor: rapier's contacts there let a loaded body sink
+                        // through internal edges (its TriMesh stress scene went to 0.9 m), and a
+                        // body that moves is not resting.
+                        let resting_slop = resting.map_or(self.options.resting_slop, |_| {
+                            if d.length() <= self.options.resting_slop
+                                && partner.shape().is_convex()
+                                && in_pile(world, ch)
+                            {
+                                PILE_SLOP * self.options.resting_slop
+                            } else {
+                                self.options.resting_slop
+                            }
+                        });
                         if let Some(r) = &resting {
                             // Within the resting slop: rapier's.
-                            if r.depth <= self.options.resting_slop {
+                            if r.depth <= resting_slop {
                                 continue;
                             }
                         }
@@ -418,17 +445,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // began (at least the resting slop): whatever got deeper than the
                         // resting slop never gets deeper still, and rapier's steady overlap is
                         // left alone.
-                        let target = resting.map_or(self.options.resting_slop, |r| {
-                            r.depth_at_start.max(self.options.resting_slop)
-                        });
+                        let target =
+                            resting.map_or(resting_slop, |r| r.depth_at_start.max(resting_slop));
                         // Over one step a pair gets deeper by at most its relative travel: an
                         // overlap along the normal beyond that (and beyond what rapier's points
                         // showed when the step began) is a measure gone wrong, not a motion to
                         // undo. (An open, bumpy TriMesh floor gave a way out 3.8 m long for a
                         // cube that had moved 5 mm; the push put it inside a ball.)
-                        let deepest_possible = travel
-                            + resting.map_or(0.0, |r| r.depth_at_start)
-                            + self.options.resting_slop;
+                        let deepest_possible =
+                            travel + resting.map_or(0.0, |r| r.depth_at_start) + resting_slop;
                         let config = match (&along_normal, on_path) {
                             (_, true) => config,
                             (Some(c), false)

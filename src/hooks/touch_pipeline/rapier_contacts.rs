@@ -21,6 +21,25 @@ pub(super) fn supported(world: &PhysicsWorld, c: ColliderHandle) -> bool {
     })
 }
 
+/// Whether collider `c` has a contact with a dynamic collider in rapier's narrow phase (it
+/// carries a pile, or rests in one).
+pub(super) fn in_pile(world: &PhysicsWorld, c: ColliderHandle) -> bool {
+    world.narrow_phase.contact_pairs_with(c).any(|p| {
+        let other = if p.collider1 == c {
+            p.collider2
+        } else {
+            p.collider1
+        };
+        p.has_any_active_contact()
+            && world
+                .colliders
+                .get(other)
+                .and_then(|co| co.parent())
+                .and_then(|b| world.bodies.get(b))
+                .is_some_and(|b| b.is_dynamic())
+    })
+}
+
 /// Where collider `co` is now: its body's pose times its offset (the guard moves bodies; their
 /// colliders follow only when it syncs them after its passes).
 pub(super) fn collider_pose_now(
