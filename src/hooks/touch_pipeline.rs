@@ -23,6 +23,7 @@ use std::sync::Arc;
 
 mod guard;
 mod hook_flags;
+mod movers;
 mod pair_view;
 mod pose_sync;
 mod rapier_contacts;

@@ -5,15 +5,9 @@
 use super::pair_view::{collider_reach, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
-    collider_pose_now, in_pile, rapier_contact_of, rapier_normal, supported,
+    collider_pose_now, rapier_contact_of, rapier_normal, resting_slop, supported,
 };
 use super::*;
-
-/// The resting slop of a body that rests in a pile on a convex floor, in resting slops
-/// ([`TouchOptions::resting_slop`]): 9 mm at the default, above the 6.5 mm rapier's soft
-/// contacts let the two lowest planks of its plank tower overlap, far from letting a pile
-/// drive a body through a floor.
-const PILE_SLOP: Real = 10.0;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
@@ -279,24 +273,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         }
                         // (A pair that moved farther is measured on its own path below.)
                         let resting = rapier.filter(|_| overlapped && trusted);
-                        // A still body in a pile, resting on a convex floor, rests in it as deep
-                        // as rapier lets the pile's own contacts sink (`PILE_SLOP`): held harder
-                        // against the floor than its neighbours hold each other, the bottom of a
-                        // pile was pushed out each step into the body above, and the pile's
-                        // compression went there (rapier's plank tower: 11.4 mm between the two
-                        // lowest planks against 6.5 mm in vanilla rapier). Not on a TriMesh or
-                        // other composite floor: rapier's contacts there let a loaded body sink
-                        // through internal edges (its TriMesh stress scene went to 0.9 m), and a
-                        // body that moves is not resting.
                         let resting_slop = resting.map_or(self.options.resting_slop, |_| {
-                            if d.length() <= self.options.resting_slop
-                                && partner.shape().is_convex()
-                                && in_pile(world, ch)
-                            {
-                                PILE_SLOP * self.options.resting_slop
-                            } else {
-                                self.options.resting_slop
-                            }
+                            resting_slop(&self.options, world, ch, partner, d)
                         });
                         if let Some(r) = &resting {
                             // Within the resting slop: rapier's.
@@ -603,47 +581,5 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
         sync_moved_colliders(world, &mut moved_bodies);
         self.sync_hook_flags(world);
-    }
-
-    /// Advances the odometers (the distance every point of each moving body may have
-    /// travelled) by this step's motion, and forgets the bodies and pairs that left the world.
-    fn advance_odometers(&mut self, world: &PhysicsWorld) {
-        for (h, b) in world.bodies.iter() {
-            let Some(prev) = self.hooks.prev_poses.get(&h) else {
-                continue;
-            };
-            let pose = b.position();
-            let radius = b
-                .colliders()
-                .iter()
-                .filter_map(|c| world.colliders.get(*c))
-                .map(collider_reach)
-                .fold(0.0, Real::max);
-            let step = (pose.translation - prev.translation).length()
-                + prev.rotation.angle_between(pose.rotation) * radius;
-            if step > 0.0 && step.is_finite() {
-                *self.odometers.entry(h).or_insert(0.0) += step;
-            }
-        }
-        self.odometers.retain(|h, _| world.bodies.contains(*h));
-        self.pair_states
-            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
-    }
-
-    /// The bodies the guard's first pass looks at: awake dynamic bodies and tools with a touch
-    /// mesh.
-    fn movers(&self, world: &PhysicsWorld) -> Vec<RigidBodyHandle> {
-        world
-            .bodies
-            .iter()
-            .filter(|(h, b)| {
-                (b.is_dynamic() || self.tools.contains_key(h))
-                    && !b.is_sleeping()
-                    && b.colliders()
-                        .iter()
-                        .any(|c| self.hooks.meshes.contains_key(c))
-            })
-            .map(|(h, _)| h)
-            .collect()
     }
 }

@@ -1,5 +1,6 @@
 //! What the step guard reads from rapier's narrow phase: its contact points of a pair at the
-//! step's poses, its contact normal, whether a body rests on something fixed.
+//! step's poses, its contact normal, whether a body rests on something fixed, and how deep a
+//! body resting on something fixed may sit (the pile rule).
 
 use super::*;
 
@@ -21,9 +22,38 @@ pub(super) fn supported(world: &PhysicsWorld, c: ColliderHandle) -> bool {
     })
 }
 
+/// The resting slop of a body that rests in a pile on a convex floor, in resting slops
+/// ([`TouchOptions::resting_slop`]): 9 mm at the default, above the 6.5 mm rapier's soft
+/// contacts let the two lowest planks of its plank tower overlap, far from letting a pile
+/// drive a body through a floor.
+const PILE_SLOP: Real = 10.0;
+
+/// The overlap tolerated for collider `c` (of a body that moved `d` over the step) resting on
+/// the fixed or kinematic `partner` before the guard pushes it back. A still body in a pile,
+/// resting on a convex floor, rests in it as deep as rapier lets the pile's own contacts sink
+/// ([`PILE_SLOP`]): held harder against the floor than its neighbours hold each other, the
+/// bottom of a pile was pushed out each step into the body above, and the pile's compression
+/// went there (rapier's plank tower: 11.4 mm between the two lowest planks against 6.5 mm in
+/// vanilla rapier). Not on a TriMesh or other composite floor: rapier's contacts there let a
+/// loaded body sink through internal edges (its TriMesh stress scene went to 0.9 m), and a
+/// body that moves is not resting. Otherwise [`TouchOptions::resting_slop`].
+pub(super) fn resting_slop(
+    options: &TouchOptions,
+    world: &PhysicsWorld,
+    c: ColliderHandle,
+    partner: &rapier3d::geometry::Collider,
+    d: Vector,
+) -> Real {
+    if d.length() <= options.resting_slop && partner.shape().is_convex() && in_pile(world, c) {
+        PILE_SLOP * options.resting_slop
+    } else {
+        options.resting_slop
+    }
+}
+
 /// Whether collider `c` has a contact with a dynamic collider in rapier's narrow phase (it
 /// carries a pile, or rests in one).
-pub(super) fn in_pile(world: &PhysicsWorld, c: ColliderHandle) -> bool {
+fn in_pile(world: &PhysicsWorld, c: ColliderHandle) -> bool {
     world.narrow_phase.contact_pairs_with(c).any(|p| {
         let other = if p.collider1 == c {
             p.collider2

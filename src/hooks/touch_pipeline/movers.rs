@@ -1,0 +1,49 @@
+//! Which bodies the step guard looks at, and how far each may have travelled since a pair's
+//! contact was last measured (the odometers that let calm pairs go unmeasured).
+
+use super::pair_view::collider_reach;
+use super::*;
+
+impl<H: PhysicsHooks> TouchPipeline<H> {
+    /// Advances the odometers (the distance every point of each moving body may have
+    /// travelled) by this step's motion, and forgets the bodies and pairs that left the world.
+    pub(super) fn advance_odometers(&mut self, world: &PhysicsWorld) {
+        for (h, b) in world.bodies.iter() {
+            let Some(prev) = self.hooks.prev_poses.get(&h) else {
+                continue;
+            };
+            let pose = b.position();
+            let radius = b
+                .colliders()
+                .iter()
+                .filter_map(|c| world.colliders.get(*c))
+                .map(collider_reach)
+                .fold(0.0, Real::max);
+            let step = (pose.translation - prev.translation).length()
+                + prev.rotation.angle_between(pose.rotation) * radius;
+            if step > 0.0 && step.is_finite() {
+                *self.odometers.entry(h).or_insert(0.0) += step;
+            }
+        }
+        self.odometers.retain(|h, _| world.bodies.contains(*h));
+        self.pair_states
+            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
+    }
+
+    /// The bodies the guard's first pass looks at: awake dynamic bodies and tools with a touch
+    /// mesh.
+    pub(super) fn movers(&self, world: &PhysicsWorld) -> Vec<RigidBodyHandle> {
+        world
+            .bodies
+            .iter()
+            .filter(|(h, b)| {
+                (b.is_dynamic() || self.tools.contains_key(h))
+                    && !b.is_sleeping()
+                    && b.colliders()
+                        .iter()
+                        .any(|c| self.hooks.meshes.contains_key(c))
+            })
+            .map(|(h, _)| h)
+            .collect()
+    }
+}
