@@ -204,7 +204,7 @@ impl<D: HapticDevice> Servo<D> {
     /// out with energy the device never put in, the proxy (and the tool, which the world
     /// moves to it) stays where it was and the device feels the coupling's stiffness there.
     /// Off, the rendering is the model's, and a property test finds worlds that pump energy
-    /// into the hand (`tests/it/haptic_servo.rs`: 209 J given against 48 J damped).
+    /// into the hand (`tests/it/haptic_energy.rs`: 209 J given against 48 J damped).
     pub fn set_passivity(&mut self, on: bool) {
         self.passivity = on;
     }

@@ -10,6 +10,7 @@ mod fig4;
 mod friction;
 mod gltf_input;
 mod grazing_drag;
+mod haptic_energy;
 mod haptic_servo;
 mod haptics;
 mod main_loop;
