@@ -65,3 +65,98 @@ fn the_pyramid_sleeps_and_stays_out_of_the_floor_as_in_vanilla_rapier() {
 fn the_plank_tower_is_no_deeper_than_in_vanilla_rapier() {
     as_in_vanilla(StressScene::PlankTower, 120);
 }
+
+/// A stack of `n` boxes of half-size `h` and `density` on a fixed cuboid floor (top at 0),
+/// each box shifted sideways by up to a tenth of its size (from `seed`), gravity scaled by
+/// `g`, stepped 240 times by `side` (vanilla with the integration parameters the crate sets
+/// when `crate_params`); the deepest overlap of any solved pair after any step.
+fn stack_deepest(
+    (n, h, density, seed): (usize, f32, f32, u32),
+    side: StressSide,
+    g: f32,
+    crate_params: bool,
+) -> f32 {
+    use rapier_touch::prelude::*;
+    use rapier_touch::rapier3d::prelude::*;
+    use rapier_touch::scenes::deepest_solved_overlap;
+    let mut world = PhysicsWorld::new();
+    world.gravity *= g;
+    let floor = world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, -h, 0.0)));
+    world.insert_collider(ColliderBuilder::cuboid(50.0 * h, h, 50.0 * h), Some(floor));
+    let mut state = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+    let mut shift = || {
+        state = state.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+        ((state >> 16) % 1000) as f32 / 1000.0 * 0.2 - 0.1
+    };
+    for i in 0..n {
+        let at = Vector::new(shift() * h, h + i as f32 * 2.02 * h, shift() * h);
+        let b = world.insert_body(RigidBodyBuilder::dynamic().translation(at));
+        world.insert_collider(ColliderBuilder::cuboid(h, h, h).density(density), Some(b));
+    }
+    let mut touch = TouchPipeline::default();
+    if side != StressSide::Rapier || crate_params {
+        TouchPipeline::configure(&mut world.integration_parameters);
+    }
+    let handles: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
+    for c in handles {
+        match side {
+            StressSide::Rapier => {}
+            StressSide::TouchHooks => {
+                let co = &mut world.colliders[c];
+                co.set_active_hooks(co.active_hooks() | ActiveHooks::MODIFY_SOLVER_CONTACTS);
+            }
+            StressSide::TouchTracked => touch.track_collider(c),
+        }
+    }
+    let mut deepest: f32 = 0.0;
+    for _ in 0..240 {
+        match side {
+            StressSide::Rapier => world.step(),
+            _ => touch.step(&mut world),
+        }
+        deepest = deepest.max(deepest_solved_overlap(&world));
+    }
+    deepest
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(12))]
+
+    /// Stacks nobody tuned: 2 to 24 boxes of 2 cm to 4 m, 0.1 to 10 times water's density
+    /// (grams to tonnes), shifted sideways at random, 4 s. Through the crate in both modes,
+    /// the deepest overlap of any solved pair is no worse than vanilla rapier's, within 1 %.
+    /// Vanilla's is the deepest of six runs: gravity 1 and 1 ± 1e-6, each with rapier's
+    /// defaults and with the integration parameters the crate sets (contact clustering off).
+    /// Within 1 %: with the hook flag rapier rebuilds a flagged pair's contacts instead of
+    /// recycling them, and its soft contacts settle a fraction of a percent apart (22 boxes of
+    /// 1.28 m: 17.32 mm against 17.28 mm). Without the pile rule (bottom bodies held to 0.9 mm
+    /// in the floor) 16 boxes of 30 cm reached 8.72 mm against vanilla's 8.54 mm (kept in the
+    /// regressions). Taller stacks of small heavy boxes topple, and chaotically: 40 boxes of
+    /// 6.8 cm, 7.6 t/m³, reached 55 mm tracked against 42 mm in vanilla (with the crate's
+    /// parameters too) while the guard counted no correction: the runs part as the tower
+    /// topples, for a cause not pinned down. Not covered here.
+    #[test]
+    fn stacks_of_any_size_and_mass_sink_no_deeper_than_in_vanilla(
+        n in 2usize..25,
+        log_h in -2.0f32..0.3,
+        log_density in -1.0f32..1.0,
+        seed in 0u32..1000,
+    ) {
+        let (h, density) = (10f32.powf(log_h), 1000.0 * 10f32.powf(log_density));
+        let stack = (n, h, density, seed);
+        let vanilla = [1.0, 1.0 + 1e-6, 1.0 - 1e-6]
+            .into_iter()
+            .flat_map(|g| [false, true].map(|params| (g, params)))
+            .map(|(g, params)| stack_deepest(stack, StressSide::Rapier, g, params))
+            .fold(0.0, f32::max);
+        for side in [StressSide::TouchHooks, StressSide::TouchTracked] {
+            let d = stack_deepest(stack, side, 1.0, false);
+            println!("{n} boxes of {:.3} m, {density:.0} kg/m3, {side:?}: {:.3} mm, vanilla {:.3} mm", 2.0 * h, 1e3 * d, 1e3 * vanilla);
+            proptest::prop_assert!(
+                d <= vanilla * 1.01 + 1e-6 * h,
+                "{n} boxes of {} m, {density} kg/m3, {side:?}: {d} m, vanilla up to {vanilla} m",
+                2.0 * h
+            );
+        }
+    }
+}

@@ -274,7 +274,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // (A pair that moved farther is measured on its own path below.)
                         let resting = rapier.filter(|_| overlapped && trusted);
                         let resting_slop = resting.map_or(self.options.resting_slop, |_| {
-                            resting_slop(&self.options, world, ch, partner, d)
+                            let extent = mesh.min_extent().min(partner_mesh.min_extent());
+                            resting_slop(&self.options, world, (ch, extent), partner, d)
                         });
                         if let Some(r) = &resting {
                             // Within the resting slop: rapier's.

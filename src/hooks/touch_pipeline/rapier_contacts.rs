@@ -22,52 +22,75 @@ pub(super) fn supported(world: &PhysicsWorld, c: ColliderHandle) -> bool {
     })
 }
 
-/// The resting slop of a body that rests in a pile on a convex floor, in resting slops
+/// The least resting slop of a body that rests in a pile on a convex floor, in resting slops
 /// ([`TouchOptions::resting_slop`]): 9 mm at the default, above the 6.5 mm rapier's soft
-/// contacts let the two lowest planks of its plank tower overlap, far from letting a pile
-/// drive a body through a floor.
+/// contacts let the two lowest planks of its plank tower overlap.
 const PILE_SLOP: Real = 10.0;
+
+/// The most of the smaller extent of a body and its floor that the pile rule lets the body
+/// rest in the floor: its centre stays above the floor's surface, and it never pokes through
+/// the floor.
+const PILE_SLOP_OF_EXTENT: Real = 0.4;
 
 /// The overlap tolerated for collider `c` (of a body that moved `d` over the step) resting on
 /// the fixed or kinematic `partner` before the guard pushes it back. A still body in a pile,
 /// resting on a convex floor, rests in it as deep as rapier lets the pile's own contacts sink
-/// ([`PILE_SLOP`]): held harder against the floor than its neighbours hold each other, the
+/// (the deepest of its contacts with the pile, at least [`PILE_SLOP`] resting slops): held harder against the floor than its neighbours hold each other, the
 /// bottom of a pile was pushed out each step into the body above, and the pile's compression
 /// went there (rapier's plank tower: 11.4 mm between the two lowest planks against 6.5 mm in
 /// vanilla rapier). Not on a TriMesh or other composite floor: rapier's contacts there let a
 /// loaded body sink through internal edges (its TriMesh stress scene went to 0.9 m), and a
-/// body that moves is not resting. Otherwise [`TouchOptions::resting_slop`].
+/// body that moves is not resting. Otherwise [`TouchOptions::resting_slop`]. `extent`: the
+/// smaller of the smallest extents of the body's collider and of `partner`.
 pub(super) fn resting_slop(
     options: &TouchOptions,
     world: &PhysicsWorld,
-    c: ColliderHandle,
+    (c, extent): (ColliderHandle, Real),
     partner: &rapier3d::geometry::Collider,
     d: Vector,
 ) -> Real {
-    if d.length() <= options.resting_slop && partner.shape().is_convex() && in_pile(world, c) {
-        PILE_SLOP * options.resting_slop
-    } else {
-        options.resting_slop
+    if d.length() > options.resting_slop || !partner.shape().is_convex() {
+        return options.resting_slop;
+    }
+    match pile_depth(world, c) {
+        Some(pile) => (PILE_SLOP * options.resting_slop)
+            .max(pile)
+            .min(PILE_SLOP_OF_EXTENT * extent)
+            .max(options.resting_slop),
+        None => options.resting_slop,
     }
 }
 
-/// Whether collider `c` has a contact with a dynamic collider in rapier's narrow phase (it
-/// carries a pile, or rests in one).
-fn in_pile(world: &PhysicsWorld, c: ColliderHandle) -> bool {
-    world.narrow_phase.contact_pairs_with(c).any(|p| {
+/// The deepest overlap rapier's manifolds hold between collider `c` and the dynamic colliders
+/// it has an active contact with (it carries a pile, or rests in one), as its narrow phase
+/// last saw them; `None` when it touches no dynamic collider.
+fn pile_depth(world: &PhysicsWorld, c: ColliderHandle) -> Option<Real> {
+    let mut deepest: Option<Real> = None;
+    for p in world.narrow_phase.contact_pairs_with(c) {
         let other = if p.collider1 == c {
             p.collider2
         } else {
             p.collider1
         };
-        p.has_any_active_contact()
-            && world
-                .colliders
-                .get(other)
-                .and_then(|co| co.parent())
-                .and_then(|b| world.bodies.get(b))
-                .is_some_and(|b| b.is_dynamic())
-    })
+        let dynamic = world
+            .colliders
+            .get(other)
+            .and_then(|co| co.parent())
+            .and_then(|b| world.bodies.get(b))
+            .is_some_and(|b| b.is_dynamic());
+        if !(dynamic && p.has_any_active_contact()) {
+            continue;
+        }
+        let d = p
+            .manifolds()
+            .iter()
+            .flat_map(|m| m.points.iter())
+            .map(|pt| -pt.dist)
+            .filter(|d| d.is_finite())
+            .fold(0.0, Real::max);
+        deepest = Some(deepest.map_or(d, |x: Real| x.max(d)));
+    }
+    deepest
 }
 
 /// Where collider `co` is now: its body's pose times its offset (the guard moves bodies; their
