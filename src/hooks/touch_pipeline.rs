@@ -205,6 +205,8 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     /// ([`TouchOptions::hook_flags_on_demand`]).
     hooked: HashSet<ColliderHandle>,
     pair_states: HashMap<(ColliderHandle, ColliderHandle), PairState>,
+    /// How many pair states there were when those of removed colliders were last dropped.
+    pair_states_pruned_at: usize,
     /// Opted-in colliders whose shape has no touch mesh: the shape's address and why.
     refused: HashMap<ColliderHandle, (usize, TouchMeshError)>,
     /// Touch started / ended per pair ([`TouchPipeline::drain_touch_events`]).
@@ -263,6 +265,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             tracked: HashSet::default(),
             hooked: HashSet::default(),
             pair_states: HashMap::default(),
+            pair_states_pruned_at: 0,
             refused: HashMap::default(),
             touch: PairTracker::default(),
             spare_poses: HashMap::default(),

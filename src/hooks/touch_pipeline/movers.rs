@@ -9,10 +9,19 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// travelled) by this step's motion, and forgets the bodies and pairs that left the world.
     pub(super) fn advance_odometers(&mut self, world: &PhysicsWorld) {
         for (h, b) in world.bodies.iter() {
+            // A fixed body, or one that did not move (a sleeping pile), adds nothing: its
+            // colliders' reach is not worth computing (a third of a sleeping pyramid's
+            // guard time went to it).
+            if b.is_fixed() {
+                continue;
+            }
             let Some(prev) = self.hooks.prev_poses.get(&h) else {
                 continue;
             };
             let pose = b.position();
+            if pose == prev {
+                continue;
+            }
             let radius = b
                 .colliders()
                 .iter()
@@ -25,9 +34,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 *self.odometers.entry(h).or_insert(0.0) += step;
             }
         }
-        self.odometers.retain(|h, _| world.bodies.contains(*h));
-        self.pair_states
-            .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
+        // Forgets what left the world, when something did (looking every step cost a
+        // sleeping pile as much as the rest of the guard).
+        if self.odometers.len() > world.bodies.len() {
+            self.odometers.retain(|h, _| world.bodies.contains(*h));
+        }
+        if self.pair_states.len() > self.pair_states_pruned_at.max(64) * 2 {
+            self.pair_states
+                .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
+            self.pair_states_pruned_at = self.pair_states.len();
+        }
     }
 
     /// The bodies the guard's first pass looks at: awake dynamic bodies and tools with a touch
