@@ -50,7 +50,7 @@
 //!   test over scale (0.3 mm to 3 km), edge stiffness (10-2000 N/m), mass (10 g to 1 t),
 //!   ball, cube and capsule tools, the update ramp on and off, in a world that steps slower
 //!   than its clock and irregularly, finds the hand given at most half of what its damping
-//!   took in contact, as the bound says (1,200 cases over eight seeds). Without the
+//!   took in contact, as the bound says (150 cases for each of ten seeds). Without the
 //!   controller a cube on a 0.3 m, 883 N/m plate gave the hand 209 J against 48 J. Its price:
 //!   a device that starts inside a surface, or a surface the world moves onto a device that
 //!   holds still, renders nothing until the device presses on; where the model would push
