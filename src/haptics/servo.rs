@@ -46,10 +46,10 @@ mod passivity;
 /// A passivity controller ([`Servo::set_passivity`], on by default) bounds the whole
 /// rendering, not only the ramp: after the device's move the proxy goes toward where the model
 /// puts it only as far as keeps the energy the proxy's moves have drawn into the coupling
-/// spring since the contact began at or below zero. Over a contact
-/// the hand then gets at most the sampled spring's give-back (`k Δx² / 2` per tick), which
-/// the device's damping absorbs under [`VirtualCoupling::max_passive_stiffness`]. The bound
-/// is exact, not a prediction of the device's next move.
+/// spring since the contact began at or below zero. Over a contact the hand then gets at most
+/// the sampled spring's give-back (`k Δx² / 2` per tick), which the device's damping absorbs
+/// under [`VirtualCoupling::max_passive_stiffness`]. The bound is exact, not a prediction of
+/// the device's next move.
 pub struct Servo<D: HapticDevice> {
     device: D,
     link: ServoLink,
@@ -196,15 +196,15 @@ impl<D: HapticDevice> Servo<D> {
 
     /// Switches the passivity controller on or off (on by default; the type's docs). On, the
     /// loop never gives the hand more than the sampled coupling spring's give-back over a
-    /// contact, whatever the world's forces do (a model
-    /// that changes under the tool, an eased-in offset, a damper's late force). Its price: a
-    /// device that starts inside a surface, or a surface the world moves onto a device that
-    /// holds still (pushed by another tool, animated), renders nothing until the device
-    /// presses on, since it has put no energy in; and where the model would push the proxy
-    /// out with energy the device never put in, the proxy (and the tool, which the world
-    /// moves to it) stays where it was and the device feels the coupling's stiffness there.
-    /// Off, the rendering is the model's, and a property test finds worlds that pump energy
-    /// into the hand (`tests/it/haptic_energy.rs`: 209 J given against 48 J damped).
+    /// contact, whatever the world's forces do (a model that changes under the tool, an
+    /// eased-in offset, a damper's late force). Its price: a device that starts inside a
+    /// surface, or a surface the world moves onto a device that holds still (pushed by
+    /// another tool, animated), renders nothing until the device presses on, since it has put
+    /// no energy in; and where the model would push the proxy out with energy the device never
+    /// put in, the proxy (and the tool, which the world moves to it) stays where it was and
+    /// the device feels the coupling's stiffness there. Off, the rendering is the model's, and
+    /// a property test finds worlds that pump energy into the hand
+    /// (`tests/it/haptic_energy.rs`: 209 J given against 48 J damped).
     pub fn set_passivity(&mut self, on: bool) {
         self.passivity = on;
     }
