@@ -1,5 +1,6 @@
-//! rapier's own stress scenes (its `examples3d/stress_tests/`) through the touch pipeline in
-//! both opt-in modes, against vanilla rapier in the same test: nothing goes through the floor,
+//! rapier's own stress scenes (its `examples3d/stress_tests/`) and stacks of boxes nobody
+//! tuned, through the touch pipeline in both opt-in modes, against vanilla rapier in the same
+//! test: nothing goes through the floor,
 //! the pile falls asleep as in vanilla, and the deepest overlap of any solved pair (measured on
 //! the colliders' poses, see `deepest_solved_overlap`) is never worse than vanilla's.
 //!
