@@ -88,10 +88,11 @@ pub struct TouchOptions {
     /// about a millimetre, and by several under a tall pile) are left to rapier. A still body
     /// in contact with another dynamic body (in a pile) on a convex floor may rest in it as
     /// deep as the deeper of the pile's own contacts' overlap and ten times this slop, capped
-    /// at 40 % of the smaller extent of the body and the floor (never below this slop): held harder against the floor than the
-    /// pile's bodies hold each other, the bottom of a pile was pushed into the body above each
-    /// step and the pile's compression went there. Default `9e-4` m: above rapier's usual
-    /// resting overlap, below the 1 mm a user sees. Range `slop ..= 0.01`.
+    /// at 40 % of the smaller extent of the body and the floor (never below this slop): held
+    /// harder against the floor than the pile's bodies hold each other, the bottom of a pile
+    /// was pushed into the body above each step and the pile's compression went there.
+    /// Default `9e-4` m: above rapier's usual resting overlap, below the 1 mm a user sees.
+    /// Range `slop ..= 0.01`.
     pub resting_slop: Real,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,

@@ -5,7 +5,7 @@
 use super::pair_view::{collider_reach, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
-    collider_pose_now, rapier_contact_of, rapier_normal, resting_slop, supported,
+    collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop, supported,
 };
 use super::*;
 
@@ -168,11 +168,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 !self.options.report_touching && d.length() + turn <= 0.5 * slop;
                             let mut restless = Vec::new();
                             for p in world.narrow_phase.contact_pairs_with(ch) {
-                                let ph = if p.collider1 == ch {
-                                    p.collider2
-                                } else {
-                                    p.collider1
-                                };
+                                let ph = other_of(p, ch);
                                 let Some(partner) = world.colliders.get(ph) else {
                                     continue;
                                 };

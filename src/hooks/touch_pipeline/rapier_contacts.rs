@@ -8,18 +8,28 @@ use super::*;
 /// phase (a body resting on the floor).
 pub(super) fn supported(world: &PhysicsWorld, c: ColliderHandle) -> bool {
     world.narrow_phase.contact_pairs_with(c).any(|p| {
-        let other = if p.collider1 == c {
-            p.collider2
-        } else {
-            p.collider1
-        };
-        p.has_any_active_contact()
-            && world.colliders.get(other).is_some_and(|co| {
-                co.parent()
-                    .and_then(|b| world.bodies.get(b))
-                    .is_none_or(|b| !b.is_dynamic())
-            })
+        p.has_any_active_contact() && on_dynamic_body(world, other_of(p, c)) == Some(false)
     })
+}
+
+/// The collider of contact pair `p` that is not `c`.
+pub(super) fn other_of(p: &rapier3d::geometry::ContactPair, c: ColliderHandle) -> ColliderHandle {
+    if p.collider1 == c {
+        p.collider2
+    } else {
+        p.collider1
+    }
+}
+
+/// Whether collider `h` is on a dynamic body (`Some(false)` with no body, or a fixed or
+/// kinematic one); `None` for a collider not in the world.
+fn on_dynamic_body(world: &PhysicsWorld, h: ColliderHandle) -> Option<bool> {
+    let co = world.colliders.get(h)?;
+    Some(
+        co.parent()
+            .and_then(|b| world.bodies.get(b))
+            .is_some_and(|b| b.is_dynamic()),
+    )
 }
 
 /// The least resting slop of a body that rests in a pile on a convex floor, in resting slops
@@ -35,10 +45,10 @@ const PILE_SLOP_OF_EXTENT: Real = 0.4;
 /// The overlap tolerated for collider `c` (of a body that moved `d` over the step) resting on
 /// the fixed or kinematic `partner` before the guard pushes it back. A still body in a pile,
 /// resting on a convex floor, rests in it as deep as rapier lets the pile's own contacts sink
-/// (the deepest of its contacts with the pile, at least [`PILE_SLOP`] resting slops): held harder against the floor than its neighbours hold each other, the
-/// bottom of a pile was pushed out each step into the body above, and the pile's compression
-/// went there (rapier's plank tower: 11.4 mm between the two lowest planks against 6.5 mm in
-/// vanilla rapier). Not on a TriMesh or other composite floor: rapier's contacts there let a
+/// (the deepest of its contacts with the pile, at least [`PILE_SLOP`] resting slops): held
+/// harder against the floor than its neighbours hold each other, the bottom of a pile was
+/// pushed out each step into the body above, and the pile's compression went there (rapier's
+/// plank tower: 11.4 mm between the two lowest planks against 6.5 mm in vanilla rapier). Not on a TriMesh or other composite floor: rapier's contacts there let a
 /// loaded body sink through internal edges (its TriMesh stress scene went to 0.9 m), and a
 /// body that moves is not resting. Otherwise [`TouchOptions::resting_slop`]. `extent`: the
 /// smaller of the smallest extents of the body's collider and of `partner`.
@@ -67,18 +77,7 @@ pub(super) fn resting_slop(
 fn pile_depth(world: &PhysicsWorld, c: ColliderHandle) -> Option<Real> {
     let mut deepest: Option<Real> = None;
     for p in world.narrow_phase.contact_pairs_with(c) {
-        let other = if p.collider1 == c {
-            p.collider2
-        } else {
-            p.collider1
-        };
-        let dynamic = world
-            .colliders
-            .get(other)
-            .and_then(|co| co.parent())
-            .and_then(|b| world.bodies.get(b))
-            .is_some_and(|b| b.is_dynamic());
-        if !(dynamic && p.has_any_active_contact()) {
+        if !(on_dynamic_body(world, other_of(p, c)) == Some(true) && p.has_any_active_contact()) {
             continue;
         }
         let d = p
