@@ -2,7 +2,7 @@
 //! went through something) back to first touch; then the moved bodies' colliders are synced
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
-use super::pair_view::{collider_reach, push_out, safe_step, PairState, PairView};
+use super::pair_view::{collider_reach, parry_depth, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
     collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop, supported,
@@ -347,19 +347,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     // points for are below (7,000 of the hull scene's 10,000
                                     // reconstructions were such pairs already in contact,
                                     // almost none corrected).
-                                    if curved {
-                                        let depth = parry3d::query::contact(
-                                            &partner_pose,
-                                            partner.shape(),
-                                            &pose_now,
-                                            co.shape(),
-                                            0.0,
-                                        )
-                                        .ok()
-                                        .map(|c| c.map_or(0.0, |c| -c.dist));
-                                        if depth.is_some_and(|d| d <= lift) {
-                                            continue;
-                                        }
+                                    if curved
+                                        && parry_depth((partner, &partner_pose), (co, &pose_now))
+                                            .is_some_and(|d| d <= lift)
+                                    {
+                                        continue;
                                     }
                                 }
                             }
@@ -376,23 +368,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                         continue;
                                     }
                                 }
-                                // With a prediction of 0 parry answers `None` for separated
-                                // shapes; a contact with a positive distance is one of its wrong
-                                // answers (seen for a small tumbling cuboid on a large one: +1.1 mm
-                                // where a corner was 1.1 mm deep). Such pairs are reconstructed.
-                                let measured = parry3d::query::contact(
-                                    &partner_pose,
-                                    partner.shape(),
-                                    &pose_now,
-                                    co.shape(),
-                                    0.0,
-                                )
-                                .ok()
-                                .and_then(|c| match c {
-                                    None => Some(0.0),
-                                    Some(c) if c.dist <= 0.0 => Some(-c.dist),
-                                    Some(_) => None,
-                                });
+                                // A contact at a positive distance is one of parry's wrong
+                                // answers (`parry_depth`): such pairs are reconstructed.
+                                let measured =
+                                    parry_depth((partner, &partner_pose), (co, &pose_now))
+                                        .filter(|d| *d >= 0.0);
                                 if let Some(overlap) = measured {
                                     self.pair_states.insert(
                                         (ch, ph),

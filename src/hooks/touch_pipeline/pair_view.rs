@@ -63,6 +63,20 @@ pub(super) fn safe_step(mesh: &TouchMesh, partner_mesh: &TouchMesh) -> Real {
     }
 }
 
+/// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
+/// query with a prediction of 0: 0 for shapes apart (parry answers `None`), minus the
+/// distance of the contact it answers (negative for a positive distance, one of its wrong
+/// answers: seen for a small tumbling cuboid on a large one, +1.1 mm where a corner was
+/// 1.1 mm deep), `None` when parry has no query for the shapes.
+pub(super) fn parry_depth(
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (mover, pose): (&rapier3d::geometry::Collider, &Pose),
+) -> Option<Real> {
+    parry3d::query::contact(partner_pose, partner.shape(), pose, mover.shape(), 0.0)
+        .ok()
+        .map(|c| c.map_or(0.0, |c| -c.dist))
+}
+
 /// The way out of an overlap along `out` (a world direction out of the partner) for the mover
 /// at its pose now: on the shapes themselves when the pair is `curved`
 /// ([`Reconstructor::push_out_shapes`]), by the exact method on the touch meshes otherwise

@@ -48,10 +48,11 @@ const PILE_SLOP_OF_EXTENT: Real = 0.4;
 /// (the deepest of its contacts with the pile, at least [`PILE_SLOP`] resting slops): held
 /// harder against the floor than its neighbours hold each other, the bottom of a pile was
 /// pushed out each step into the body above, and the pile's compression went there (rapier's
-/// plank tower: 11.4 mm between the two lowest planks against 6.5 mm in vanilla rapier). Not on a TriMesh or other composite floor: rapier's contacts there let a
-/// loaded body sink through internal edges (its TriMesh stress scene went to 0.9 m), and a
-/// body that moves is not resting. Otherwise [`TouchOptions::resting_slop`]. `extent`: the
-/// smaller of the smallest extents of the body's collider and of `partner`.
+/// plank tower: 11.4 mm between the two lowest planks against 6.5 mm in vanilla rapier). Not
+/// on a TriMesh or other composite floor: rapier's contacts there let a loaded body sink
+/// through internal edges (its TriMesh stress scene went to 0.9 m), and a body that moves is
+/// not resting. Otherwise [`TouchOptions::resting_slop`]. `extent`: the smaller of the
+/// smallest extents of the body's collider and of `partner`.
 pub(super) fn resting_slop(
     options: &TouchOptions,
     world: &PhysicsWorld,
