@@ -83,6 +83,39 @@ impl StressSide {
             StressSide::TouchTracked => "touch_tracked",
         }
     }
+
+    /// Sets `world` up for this side, every collider in it opted in as the side says (the
+    /// pipeline's integration parameters on the touch sides), and the pipeline to step it
+    /// with ([`StressSide::step`]; unused by vanilla rapier).
+    pub fn pipeline(self, world: &mut PhysicsWorld) -> TouchPipeline {
+        let mut touch = TouchPipeline::default();
+        if self != StressSide::Rapier {
+            TouchPipeline::configure(&mut world.integration_parameters);
+        }
+        let handles: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
+        for h in handles {
+            match self {
+                StressSide::Rapier => {}
+                StressSide::TouchHooks => {
+                    if let Some(co) = world.colliders.get_mut(h) {
+                        co.set_active_hooks(
+                            co.active_hooks() | ActiveHooks::MODIFY_SOLVER_CONTACTS,
+                        );
+                    }
+                }
+                StressSide::TouchTracked => touch.track_collider(h),
+            }
+        }
+        touch
+    }
+
+    /// One step of `world` on this side: rapier's own, or through `touch`.
+    pub fn step(self, world: &mut PhysicsWorld, touch: &mut TouchPipeline) {
+        match self {
+            StressSide::Rapier => world.step(),
+            _ => touch.step(world),
+        }
+    }
 }
 
 /// A built stress scene: its world and its floor collider.
@@ -441,22 +474,7 @@ pub fn run_stress_with_gravity(
 ) -> StressRun {
     let StressWorld { mut world, floor } = stress_world(scene);
     world.gravity *= gravity_scale;
-    let handles: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
-    let mut touch = TouchPipeline::default();
-    if side != StressSide::Rapier {
-        TouchPipeline::configure(&mut world.integration_parameters);
-    }
-    for h in handles {
-        match side {
-            StressSide::Rapier => {}
-            StressSide::TouchHooks => {
-                if let Some(co) = world.colliders.get_mut(h) {
-                    co.set_active_hooks(co.active_hooks() | ActiveHooks::MODIFY_SOLVER_CONTACTS);
-                }
-            }
-            StressSide::TouchTracked => touch.track_collider(h),
-        }
-    }
+    let mut touch = side.pipeline(&mut world);
     let mut max_penetration: Real = 0.0;
     let mut elapsed = std::time::Duration::ZERO;
     // Bodies last seen straight above the floor's surface, and those seen below it after.
@@ -470,10 +488,7 @@ pub fn run_stress_with_gravity(
     let mut through: HashSet<RigidBodyHandle> = HashSet::new();
     for _ in 0..steps {
         let t0 = std::time::Instant::now();
-        match side {
-            StressSide::Rapier => world.step(),
-            _ => touch.step(&mut world),
-        }
+        side.step(&mut world, &mut touch);
         elapsed += t0.elapsed();
         max_penetration = max_penetration.max(deepest_solved_overlap(&world));
         for (h, b) in world.bodies.iter().filter(|(_, b)| b.is_dynamic()) {

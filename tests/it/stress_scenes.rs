@@ -94,27 +94,13 @@ fn stack_deepest(
         let b = world.insert_body(RigidBodyBuilder::dynamic().translation(at));
         world.insert_collider(ColliderBuilder::cuboid(h, h, h).density(density), Some(b));
     }
-    let mut touch = TouchPipeline::default();
-    if side != StressSide::Rapier || crate_params {
+    let mut touch = side.pipeline(&mut world);
+    if crate_params {
         TouchPipeline::configure(&mut world.integration_parameters);
-    }
-    let handles: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
-    for c in handles {
-        match side {
-            StressSide::Rapier => {}
-            StressSide::TouchHooks => {
-                let co = &mut world.colliders[c];
-                co.set_active_hooks(co.active_hooks() | ActiveHooks::MODIFY_SOLVER_CONTACTS);
-            }
-            StressSide::TouchTracked => touch.track_collider(c),
-        }
     }
     let mut deepest: f32 = 0.0;
     for _ in 0..240 {
-        match side {
-            StressSide::Rapier => world.step(),
-            _ => touch.step(&mut world),
-        }
+        side.step(&mut world, &mut touch);
         deepest = deepest.max(deepest_solved_overlap(&world));
     }
     deepest
