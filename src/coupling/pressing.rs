@@ -61,16 +61,16 @@ pub(super) fn reaction_of(
 /// Where the surface may meet `mesh` moving from `start` to `end` (surface frame): its swept
 /// bounds and a margin.
 pub(super) fn part_query(mesh: &TouchMesh, start: &Pose, end: &Pose) -> Aabb {
-    let (swept, margin) = part_sweep(mesh, start, end);
-    swept.loosened(2.0 * margin)
+    part_sweep(mesh, start, end).0
 }
 
-/// The bounds of `mesh` over its motion from `start` to `end`, and its contact margin there.
+/// [`part_query`]'s box (the bounds of `mesh` over its motion from `start` to `end`,
+/// loosened by twice its contact margin), and that margin.
 fn part_sweep(mesh: &TouchMesh, start: &Pose, end: &Pose) -> (Aabb, Real) {
     let local = mesh.local_aabb();
     let swept: Aabb = local.transform_by(start).merged(&local.transform_by(end));
     let margin = contact_margin(&swept, 1e-4);
-    (swept, margin)
+    (swept.loosened(2.0 * margin), margin)
 }
 
 /// Finds the contacts of `mesh` (moving from `start` to `end`, surface frame) with the surface
@@ -91,14 +91,13 @@ pub(super) fn find_contacts(
     contacts: &mut Vec<SurfaceContact>,
     velocities: &mut Vec<Real>,
 ) {
-    let (swept, margin) = part_sweep(mesh, start, end);
+    let (query, margin) = part_sweep(mesh, start, end);
     let snapshot = SurfaceSnapshot {
         before,
         now,
         triangles,
     };
     // Keep the triangles whose own bounds over the substep meet the tool's (`part_query`).
-    let query = swept.loosened(2.0 * margin);
     kept.clear();
     kept.extend(candidates.iter().copied().filter(|&t| {
         snapshot
