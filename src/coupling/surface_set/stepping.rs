@@ -119,7 +119,7 @@ impl SurfaceSet {
             })
             .collect();
         let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
-        let mut touching = parry3d::utils::hashset::HashSet::default();
+        let mut touching = self.touch.take_spare();
         for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
             let h = dt / n as Real;
