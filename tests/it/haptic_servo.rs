@@ -535,3 +535,40 @@ fn a_device_that_reads_nan_mid_press_gets_no_force_and_moves_no_tool() {
         );
     }
 }
+
+#[test]
+fn a_coupling_of_no_stiffness_renders_nothing_and_no_nan_with_the_passivity_controller() {
+    // Zero, negative and NaN coupling stiffness: the controller's spring energy and its
+    // bounded step must not divide by zero or pass a NaN on; the device gets no force.
+    for stiffness in [0.0, -5.0, f32::NAN] {
+        let (mut world, mut set, tool, _) =
+            plate_scene(0.3, 24, 400.0, 0.5, 4, SharedShape::ball(0.03));
+        let (world_end, servo_end) = haptic_link();
+        set.connect_haptic(tool, world_end, &mut world).unwrap();
+        let device = Scripted {
+            tick: 0,
+            pose: |t| Vector::new(0.0, 0.02 + 0.03 * (1.0 - t as f32 / 500.0).max(0.0), 0.0),
+            forces: Vec::new(),
+        };
+        let coupling = VirtualCoupling {
+            stiffness,
+            damping: 0.0,
+            max_force: 30.0,
+        };
+        let mut servo = Servo::new(device, servo_end, coupling, 5000.0).unwrap();
+        assert!(servo.passivity());
+        for _ in 0..20 {
+            for _ in 0..83 {
+                servo.tick();
+            }
+            set.step(&mut world);
+            assert!(world.colliders[tool].position().translation.is_finite());
+        }
+        let forces = &servo.device().forces;
+        assert!(
+            forces.iter().all(|f| *f == Vector::ZERO),
+            "stiffness {stiffness}: {:?}",
+            forces.iter().find(|f| **f != Vector::ZERO)
+        );
+    }
+}
