@@ -132,7 +132,7 @@ pub struct TouchWorld {
     /// The soft surfaces and their tools.
     pub surfaces: SurfaceSet,
     /// Where the bodies start the step being run (between the two halves of a step).
-    prev: Option<HashMap<RigidBodyHandle, Pose>>,
+    prev: Option<crate::hooks::PoseHistory>,
     tracked: HashMap<Entity, ColliderHandle>,
     warned_timestep: bool,
 }

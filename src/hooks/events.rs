@@ -2,7 +2,6 @@
 //! it (rapier's contacts, and the touches the step guard restores).
 
 use crate::touch_diff::TouchDiff;
-use parry3d::utils::hashset::HashSet;
 use rapier3d::geometry::ColliderHandle;
 
 /// Two colliders, at least one of them opted in to the touch pipeline, started or stopped
@@ -63,9 +62,9 @@ pub(super) fn ordered(a: ColliderHandle, b: ColliderHandle) -> (ColliderHandle, 
     }
 }
 
-/// Records the pairs touching now.
-pub(super) fn update(tracker: &mut PairTracker, now: HashSet<(ColliderHandle, ColliderHandle)>) {
-    tracker.update(
+/// Records the pairs touching now, listed in an order kept from step to step.
+pub(super) fn update(tracker: &mut PairTracker, now: Vec<(ColliderHandle, ColliderHandle)>) {
+    tracker.update_listed(
         now,
         |(a, b)| (a.into_raw_parts(), b.into_raw_parts()),
         |(collider1, collider2)| PairTouchEvent::Stopped {

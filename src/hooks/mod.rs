@@ -26,12 +26,15 @@
 
 mod events;
 mod pair_filter;
+mod pose_history;
 mod report;
 mod sets;
 mod touch_hooks;
 mod touch_pipeline;
 
 pub use events::PairTouchEvent;
+#[cfg(feature = "bevy")]
+pub(crate) use pose_history::PoseHistory;
 pub use report::{PairReport, ToolFeedback};
 pub use sets::PhysicsSets;
 pub use touch_hooks::{HookCounters, TouchHooks};

@@ -9,6 +9,7 @@ use rapier3d::dynamics::{RigidBodyHandle, RigidBodySet};
 use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
 use rapier3d::pipeline::{ContactModificationContext, PairFilterContext, PhysicsHooks};
 // parry's hash map (hashbrown with foldhash), as rapier uses: SipHash was 4.5 % of a pile's step.
+use super::pose_history::PoseHistory;
 use parry3d::utils::hashmap::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -216,7 +217,7 @@ pub struct TouchHooks<H: PhysicsHooks = ()> {
     /// The user's hooks, called after this crate's.
     pub inner: H,
     pub(crate) meshes: HashMap<ColliderHandle, CachedMesh>,
-    pub(crate) prev_poses: HashMap<RigidBodyHandle, Pose>,
+    pub(crate) prev_poses: PoseHistory,
     pub(crate) options: ReconstructionOptions,
     pub(crate) slop: crate::math::Real,
     cache: Mutex<PairCache>,
@@ -256,7 +257,7 @@ impl<H: PhysicsHooks> TouchHooks<H> {
         Self {
             inner,
             meshes: HashMap::default(),
-            prev_poses: HashMap::default(),
+            prev_poses: PoseHistory::default(),
             options: ReconstructionOptions::default(),
             slop: 0.0,
             cache: Mutex::new(HashMap::default()),
@@ -340,7 +341,7 @@ impl<H: PhysicsHooks> TouchHooks<H> {
 
 /// The motion of a body over the last step (zero without history).
 pub(crate) fn body_motion(
-    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    prev_poses: &PoseHistory,
     bodies: &RigidBodySet,
     body: Option<RigidBodyHandle>,
 ) -> Vector {
@@ -353,7 +354,7 @@ pub(crate) fn body_motion(
 /// the last step: both bodies' translations plus the arcs of their rotations (infinite when
 /// a pose is not finite).
 pub(crate) fn relative_travel(
-    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    prev_poses: &PoseHistory,
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     c1: ColliderHandle,
@@ -391,7 +392,7 @@ pub(crate) fn relative_travel(
 /// Where collider `c` was at the start of the step: its body's recorded pose times the
 /// collider's offset, or `pos` (its pose now) when the body has no history or it has no body.
 pub(crate) fn previous_collider_pose(
-    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    prev_poses: &PoseHistory,
     co: &rapier3d::geometry::Collider,
     pos: Pose,
 ) -> Pose {
@@ -409,7 +410,7 @@ pub(crate) fn previous_collider_pose(
 /// ends at `pos2`, and turns about its body's centre of mass (the bounding-box centre of its
 /// mesh when the body has no mass).
 pub(crate) fn relative_motion(
-    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    prev_poses: &PoseHistory,
     bodies: &RigidBodySet,
     co1: &rapier3d::geometry::Collider,
     pos1: Pose,
@@ -441,7 +442,7 @@ pub(crate) fn relative_motion(
 pub(crate) fn pair_configuration(
     rec: &mut Reconstructor,
     meshes: &HashMap<ColliderHandle, CachedMesh>,
-    prev_poses: &HashMap<RigidBodyHandle, Pose>,
+    prev_poses: &PoseHistory,
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     c1: ColliderHandle,

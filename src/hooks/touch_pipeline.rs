@@ -3,6 +3,7 @@
 
 use super::events::{self, PairTouchEvent, PairTracker};
 use super::pair_filter::{rapier_solves_pair, user_removes_contact};
+use super::pose_history::PoseHistory;
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
     body_motion, meshed_exactly, pair_configuration, previous_collider_pose, shape_key, CachedMesh,
@@ -214,7 +215,7 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     touch: PairTracker,
     /// The last step's pose history, kept to be refilled (a map of every body collected anew
     /// each step grew and rehashed every time: a tenth of the pyramid scene's touch step).
-    spare_poses: HashMap<RigidBodyHandle, Pose>,
+    spare_poses: PoseHistory,
 }
 
 impl<H: PhysicsHooks> std::fmt::Debug for TouchPipeline<H> {
@@ -269,7 +270,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             pair_states_pruned_at: 0,
             refused: HashMap::default(),
             touch: PairTracker::default(),
-            spare_poses: HashMap::default(),
+            spare_poses: PoseHistory::default(),
         }
     }
 
@@ -418,7 +419,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         &mut self,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
-    ) -> HashMap<RigidBodyHandle, Pose> {
+    ) -> PoseHistory {
         self.refresh_meshes(colliders);
         self.hooks.options = self.options.reconstruction;
         self.hooks.slop = self.options.penetration_slop;
@@ -436,19 +437,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
         // Pose history: where every body starts this step.
         let mut prev = std::mem::take(&mut self.spare_poses);
-        prev.clear();
-        prev.extend(bodies.iter().map(|(h, b)| (h, *b.position())));
+        prev.record(bodies);
         self.hooks.begin_step();
         prev
     }
 
     /// The part of a step after rapier's: the step guard, the tool proxies and the touch
     /// events; `prev` is what [`TouchPipeline::begin_step`] returned.
-    pub(crate) fn end_step(
-        &mut self,
-        world: &mut PhysicsWorld,
-        prev: HashMap<RigidBodyHandle, Pose>,
-    ) {
+    pub(crate) fn end_step(&mut self, world: &mut PhysicsWorld, prev: PoseHistory) {
         self.spare_poses = std::mem::replace(&mut self.hooks.prev_poses, prev);
 
         self.reports.clear();
@@ -500,7 +496,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// and the pairs reported), compared with the last step's.
     fn record_touches(&mut self, world: &PhysicsWorld) {
         let meshes = &self.hooks.meshes;
-        let mut now = self.touch.take_spare();
+        let mut now = self.touch.take_spare_list();
         now.extend(
             world
                 .narrow_phase

@@ -182,7 +182,8 @@ pub(super) fn rapier_normal(
     fixed: ColliderHandle,
     moving: ColliderHandle,
 ) -> Option<Vector> {
-    let pair = world.narrow_phase.contact_pair(fixed, moving)?;
+    // Looked up from the mover's side: rapier scans the first collider's pairs.
+    let pair = world.narrow_phase.contact_pair(moving, fixed)?;
     let (manifold, _) = pair.find_deepest_contact()?;
     let n = manifold.data.normal;
     let n = if pair.collider1 == fixed { n } else { -n };
