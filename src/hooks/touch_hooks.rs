@@ -27,6 +27,33 @@ pub(crate) struct CachedMesh {
     pub exact: bool,
     /// What the shape is, for the primitives ([`shape_key`]): equal primitives share a mesh.
     pub key: Option<ShapeKey>,
+    /// [`shape_reach`] of the shape, computed once (a convex hull's bounding sphere is a pass
+    /// over its points: asked for every moving hull every step, it was a twentieth of the
+    /// guard on rapier's convex-hull stress scene).
+    pub reach: crate::math::Real,
+}
+
+/// How far a point of `shape` can be from the shape's origin: the distance to its bounding
+/// sphere's centre plus the sphere's radius (the centre of a convex hull's sphere is not its
+/// origin).
+pub(crate) fn shape_reach(shape: &dyn parry3d::shape::Shape) -> crate::math::Real {
+    let sphere = shape.compute_local_bounding_sphere();
+    sphere.center.length() + sphere.radius
+}
+
+/// How far a point of collider `co` (handle `h`) can be from its body's origin: the offset to
+/// its parent plus its shape's reach (a turn by `θ` moves it by at most `θ` times this). The
+/// reach is read from the collider's touch mesh in `meshes` when it has one.
+pub(crate) fn collider_reach(
+    meshes: &HashMap<ColliderHandle, CachedMesh>,
+    h: ColliderHandle,
+    co: &rapier3d::geometry::Collider,
+) -> crate::math::Real {
+    co.position_wrt_parent()
+        .map_or(0.0, |p| p.translation.length())
+        + meshes
+            .get(&h)
+            .map_or_else(|| shape_reach(co.shape()), |m| m.reach)
 }
 
 /// A primitive shape by kind and dimensions (the bits of its parameters).
@@ -354,6 +381,7 @@ pub(crate) fn body_motion(
 /// the last step: both bodies' translations plus the arcs of their rotations (infinite when
 /// a pose is not finite).
 pub(crate) fn relative_travel(
+    meshes: &HashMap<ColliderHandle, CachedMesh>,
     prev_poses: &PoseHistory,
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
@@ -371,10 +399,7 @@ pub(crate) fn relative_travel(
             return (Vector::ZERO, 0.0);
         };
         let now = body.position();
-        let reach = co
-            .position_wrt_parent()
-            .map_or(0.0, |p| p.translation.length())
-            + co.shape().compute_local_bounding_sphere().radius;
+        let reach = collider_reach(meshes, c, co);
         (
             now.translation - prev.translation,
             prev.rotation.angle_between(now.rotation) * reach,
@@ -489,7 +514,14 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
                 .map(|c| -c.dist)
                 .fold(0.0, crate::math::Real::max)
         });
-        let travel = relative_travel(&self.prev_poses, context.bodies, context.colliders, c1, c2);
+        let travel = relative_travel(
+            &self.meshes,
+            &self.prev_poses,
+            context.bodies,
+            context.colliders,
+            c1,
+            c2,
+        );
         let deep = depth > self.slop && depth <= self.slop + travel;
         // Two dynamic bodies that moved less than their safe step length relative to each
         // other cannot have passed through each other: their contact is rapier's soft contact,

@@ -6,8 +6,8 @@ use super::pair_filter::{rapier_solves_pair, user_removes_contact};
 use super::pose_history::PoseHistory;
 use super::report::{PairReport, ToolFeedback};
 use super::touch_hooks::{
-    body_motion, meshed_exactly, pair_configuration, previous_collider_pose, shape_key, CachedMesh,
-    ShapeKey, TouchHooks,
+    body_motion, collider_reach, meshed_exactly, pair_configuration, previous_collider_pose,
+    shape_key, shape_reach, CachedMesh, ShapeKey, TouchHooks,
 };
 use crate::coupling::SurfaceSet;
 use crate::geometry::{
@@ -587,6 +587,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             mesh,
                             exact: meshed_exactly(co.shape()),
                             key,
+                            reach: shape_reach(co.shape()),
                         },
                     );
                 }

@@ -2,7 +2,7 @@
 //! went through something) back to first touch; then the moved bodies' colliders are synced
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
-use super::pair_view::{collider_reach, parry_depth, push_out, safe_step, PairState, PairView};
+use super::pair_view::{parry_depth, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
     collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop, supported,
@@ -87,8 +87,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
                     // How far a point of the collider may have travelled: translation plus the
                     // arc of its rotation.
-                    let turn =
-                        prev_pose.rotation.angle_between(pose_now.rotation) * collider_reach(co);
+                    let turn = prev_pose.rotation.angle_between(pose_now.rotation)
+                        * collider_reach(&self.hooks.meshes, ch, co);
                     let fast = d.length() + turn >= mesh.min_extent().min(prediction);
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
@@ -109,7 +109,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             );
                             let partner_turn =
                                 partner_prev.rotation.angle_between(partner_pose.rotation)
-                                    * collider_reach(partner);
+                                    * collider_reach(&self.hooks.meshes, ph, partner);
                             let travel = (d - dp).length() + turn + partner_turn;
                             let smooth = no_new_corner(co, mesh_exact, turn > 0.0)
                                 && no_new_corner(

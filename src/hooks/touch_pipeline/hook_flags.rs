@@ -2,8 +2,8 @@
 //! only on the colliders of bodies that moved farther than rapier's prediction distance, since
 //! rapier recomputes every hooked pair's contacts every step.
 
-use super::pair_view::collider_reach;
 use super::*;
+use crate::hooks::touch_hooks::collider_reach;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// With [`TouchOptions::hook_flags_on_demand`]: raises the hook flag on the managed
@@ -29,7 +29,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     (Some(b), Some(prev)) => {
                         let now = b.position();
                         (now.translation - prev.translation).length()
-                            + prev.rotation.angle_between(now.rotation) * collider_reach(co)
+                            + prev.rotation.angle_between(now.rotation)
+                                * collider_reach(&self.hooks.meshes, *h, co)
                             > slop
                     }
                     _ => false,

@@ -1,8 +1,8 @@
 //! Which bodies the step guard looks at, and how far each may have travelled since a pair's
 //! contact was last measured (the odometers that let calm pairs go unmeasured).
 
-use super::pair_view::collider_reach;
 use super::*;
+use crate::hooks::touch_hooks::collider_reach;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// Advances the odometers (the distance every point of each moving body may have
@@ -25,8 +25,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             let radius = b
                 .colliders()
                 .iter()
-                .filter_map(|c| world.colliders.get(*c))
-                .map(collider_reach)
+                .filter_map(|c| Some((*c, world.colliders.get(*c)?)))
+                .map(|(c, co)| collider_reach(&self.hooks.meshes, c, co))
                 .fold(0.0, Real::max);
             let step = (pose.translation - prev.translation).length()
                 + prev.rotation.angle_between(pose.rotation) * radius;

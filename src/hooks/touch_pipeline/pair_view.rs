@@ -1,18 +1,9 @@
 //! One pair as the step guard reads it ([`PairView`]), what it remembers of a pair between
-//! steps ([`PairState`]), how far a collider's points reach from its body
-//! ([`collider_reach`]), and the way out of an overlap ([`push_out`]).
+//! steps ([`PairState`]), and the way out of an overlap ([`push_out`]).
 
 use super::rapier_contacts::RapierContact;
 use super::*;
 use crate::geometry::ContactConfiguration;
-
-/// How far a point of collider `co` can be from its body's origin: the offset to its parent
-/// plus its bounding radius (a turn by `θ` moves it by at most `θ` times this).
-pub(super) fn collider_reach(co: &rapier3d::geometry::Collider) -> Real {
-    co.position_wrt_parent()
-        .map_or(0.0, |p| p.translation.length())
-        + co.shape().compute_local_bounding_sphere().radius
-}
 
 /// The overlap of a pair when it was last measured, and both bodies' odometers then.
 #[derive(Copy, Clone, Debug)]
