@@ -26,7 +26,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             };
             let moved = co.parent().is_some_and(|bh| {
                 match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
-                    (Some(b), Some(prev)) => {
+                    // A body that did not move (a sleeping pile's) is not measured.
+                    (Some(b), Some(prev)) if b.position() != prev => {
                         let now = b.position();
                         (now.translation - prev.translation).length()
                             + prev.rotation.angle_between(now.rotation)
