@@ -28,3 +28,4 @@ mod stress_scenes;
 mod surface;
 mod surface_bvh;
 mod tool_shapes;
+mod toppling;

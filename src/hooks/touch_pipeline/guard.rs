@@ -292,11 +292,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 out,
                             )
                         };
-                        let (config, along_normal) = if let Some(r) = &resting {
+                        let (config, along_normal, blocked_at_start) = if let Some(r) = &resting {
                             let Some(c) = push_out(r.normal) else {
                                 continue;
                             };
-                            (c.clone(), Some(c))
+                            (c.clone(), Some(c), false)
                         } else {
                             if !self.options.report_touching && !may_tunnel {
                                 // A slow pair: rapier's own contact points, re-read at the poses
@@ -401,14 +401,25 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             };
                             // A pair that already overlapped when the step began has no first touch
                             // on this step's path: it is measured along rapier's own contact normal
-                            // instead (its exit along -D can be far away).
-                            let along_normal = if config.on_trajectory || !config.needs_correction()
+                            // instead (its exit along -D can be far away). So is a pair rapier had
+                            // in contact when the step began whose first touch is at the path's
+                            // very start (a cube spinning on its edge, too fast for rapier's points
+                            // to be read): undoing the whole step froze such bodies on the floor,
+                            // balanced on an edge, for hundreds of steps (CCD stress scene).
+                            // Only on a convex partner: on an open TriMesh floor the push along
+                            // rapier's normal left a spinning L-shaped body 1.7 mm in.
+                            let blocked_at_start = config.on_trajectory
+                                && overlapped
+                                && partner.shape().is_convex()
+                                && config.time_of_impact.is_some_and(|t| t < 0.1);
+                            let along_normal = if (config.on_trajectory && !blocked_at_start)
+                                || !config.needs_correction()
                             {
                                 None
                             } else {
                                 rapier_normal(world, ph, ch).and_then(push_out)
                             };
-                            (config, along_normal)
+                            (config, along_normal, blocked_at_start)
                         };
                         if pass == 0
                             && config.state != TouchState::Separated
@@ -425,13 +436,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // is resolving) against a fixed or kinematic partner is only pushed
                         // back, along rapier's normal, to the resting slop when it got deeper;
                         // resting pairs of two dynamic bodies (a stack) are rapier's.
-                        let on_path = config.on_trajectory && resting.is_none();
+                        let on_path =
+                            config.on_trajectory && resting.is_none() && along_normal.is_none();
                         // A resting contact is pushed back to the depth it had when the step
                         // began (at least the resting slop): whatever got deeper than the
                         // resting slop never gets deeper still, and rapier's steady overlap is
                         // left alone.
-                        let target =
-                            resting.map_or(resting_slop, |r| r.depth_at_start.max(resting_slop));
+                        // A path blocked at its start (above) is pushed back to the slop.
+                        let target = match &resting {
+                            Some(r) => r.depth_at_start.max(resting_slop),
+                            None if blocked_at_start => slop,
+                            None => resting_slop,
+                        };
                         // Over one step a pair gets deeper by at most its relative travel: an
                         // overlap along the normal beyond that (and beyond what rapier's points
                         // showed when the step began) is a measure gone wrong, not a motion to
@@ -442,10 +458,13 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let config = match (&along_normal, on_path) {
                             (_, true) => config,
                             (Some(c), false)
-                                if c.depth > target + 0.1 * slop
+                                if c.depth <= target + 0.1 * slop
                                     && c.depth <= deepest_possible
                                     && !partner_dynamic =>
                             {
+                                continue;
+                            }
+                            (Some(c), false) if c.depth <= deepest_possible && !partner_dynamic => {
                                 let keep = target / c.depth;
                                 let mut c = c.clone();
                                 c.reversing_vector *= 1.0 - keep;
@@ -454,6 +473,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 c.depth -= target;
                                 c
                             }
+                            // A blocked path whose push along rapier's normal is no measure
+                            // (deeper than the pair could have got) is undone to first touch.
+                            _ if blocked_at_start => config,
                             _ => continue,
                         };
                         // (A resting push is already net of its slop.)
@@ -485,14 +507,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let turned = config.touch_pose.rotation != pose_now.rotation;
                         // The contact normal, out of the partner toward this body, turned to
                         // the side the body came from (an open mesh's triangle normal may face
-                        // either side).
-                        let n = config.patches.first().map(|p| {
-                            if p.normal.dot(r) < 0.0 {
-                                -p.normal
-                            } else {
-                                p.normal
-                            }
-                        });
+                        // either side). A configuration with no patch (a path that overlaps
+                        // from its very start, undone whole) is blocked along the way back:
+                        // that is its normal. Left without one, its velocity was never
+                        // removed: eight cubes of the CCD scene lay frozen on the floor for
+                        // hundreds of steps, walked back whole every step while gravity grew
+                        // their speed to 36 m/s.
+                        let blocked = config.time_of_impact.is_some_and(|t| t < 0.1);
+                        let n = match config.patches.first() {
+                            Some(p) if p.normal.dot(r) < 0.0 => Some(-p.normal),
+                            Some(p) => Some(p.normal),
+                            None => r.try_normalize().filter(|_| blocked),
+                        };
                         // Split the correction by inverse mass when the partner is dynamic
                         // too, unless the partner rests on a fixed or kinematic collider: its
                         // share would push it into what supports it (seen: a thin dynamic plate
@@ -521,7 +547,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // blocked motion: what still closes along the way back goes too (a
                         // body sliding into a concave corner of a TriMesh had velocity
                         // tangent to the patch normal, and the guard held it there for good).
-                        let blocked = config.time_of_impact.is_some_and(|t| t < 0.1);
                         let closing = n.and_then(|n| {
                             let b = world.bodies.get(bh)?;
                             let vrel = b.linvel() - partner_v;
