@@ -100,7 +100,7 @@
 use crate::coupling::{AttachOptions, CouplingError, SurfaceHandle, SurfaceSet, ToolReaction};
 use crate::haptics::WorldLink;
 use crate::hooks::{PhysicsSets, TouchPipeline};
-use crate::math::{Pose, Real};
+use crate::math::Real;
 use crate::surface::MassSpringSurface;
 use bevy::asset::{Assets, RenderAssetUsages};
 use bevy::ecs::intern::Interned;
@@ -118,7 +118,6 @@ use bevy_rapier3d::plugin::context::{
 use bevy_rapier3d::plugin::{PhysicsSet, RapierConfiguration, TimestepMode};
 use bevy_rapier3d::prelude::{RapierColliderHandle, RapierRigidBodyHandle};
 use parry3d::utils::hashmap::HashMap;
-use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderHandle, SolverFlags};
 use rapier3d::pipeline::{PhysicsHooks, PhysicsWorld};
 
