@@ -408,10 +408,29 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // balanced on an edge, for hundreds of steps (CCD stress scene).
                             // Only on a convex partner: on an open TriMesh floor the push along
                             // rapier's normal left a spinning L-shaped body 1.7 mm in.
+                            // A curved shape rolling on its partner is such a pair too, whatever
+                            // rapier's points say (they stay where the shape touched, and it rolls
+                            // away from them): within the resting slop of it when the step began,
+                            // by parry's distance on the shapes.
+                            let rolling = || {
+                                let partner_prev = previous_collider_pose(
+                                    &self.hooks.prev_poses,
+                                    partner,
+                                    partner_pose,
+                                );
+                                curved
+                                    && parry3d::query::distance(
+                                        &partner_prev,
+                                        partner.shape(),
+                                        &prev_pose,
+                                        co.shape(),
+                                    )
+                                    .is_ok_and(|d| d.distance <= resting_slop)
+                            };
                             let blocked_at_start = config.on_trajectory
-                                && overlapped
                                 && partner.shape().is_convex()
-                                && config.time_of_impact.is_some_and(|t| t < 0.1);
+                                && ((overlapped && config.time_of_impact.is_some_and(|t| t < 0.1))
+                                    || rolling());
                             let along_normal = if (config.on_trajectory && !blocked_at_start)
                                 || !config.needs_correction()
                             {
