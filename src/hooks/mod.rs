@@ -29,6 +29,7 @@ mod pair_filter;
 mod pose_history;
 mod report;
 mod sets;
+mod step_motion;
 mod touch_hooks;
 mod touch_pipeline;
 

@@ -22,6 +22,7 @@ use rapier3d::geometry::{ColliderHandle, ColliderSet};
 use rapier3d::pipeline::{ActiveHooks, EventHandler, PhysicsHooks, PhysicsWorld, QueryFilter};
 use std::sync::Arc;
 
+mod correction;
 mod guard;
 mod hook_flags;
 mod movers;

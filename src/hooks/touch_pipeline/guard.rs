@@ -2,10 +2,11 @@
 //! went through something) back to first touch; then the moved bodies' colliders are synced
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
+use super::correction::apply_correction;
 use super::pair_view::{parry_depth, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
-    collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop, supported,
+    collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop,
 };
 use super::*;
 
@@ -521,97 +522,13 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 continue;
                             }
                         }
-                        let r = config.reversing_vector;
-                        // (A translation keeps the current orientation exactly.)
-                        let turned = config.touch_pose.rotation != pose_now.rotation;
-                        // The contact normal, out of the partner toward this body, turned to
-                        // the side the body came from (an open mesh's triangle normal may face
-                        // either side). A configuration with no patch (a path that overlaps
-                        // from its very start, undone whole) is blocked along the way back:
-                        // that is its normal. Left without one, its velocity was never
-                        // removed: eight cubes of the CCD scene lay frozen on the floor for
-                        // hundreds of steps, walked back whole every step while gravity grew
-                        // their speed to 36 m/s.
-                        let blocked = config.time_of_impact.is_some_and(|t| t < 0.1);
-                        let n = match config.patches.first() {
-                            Some(p) if p.normal.dot(r) < 0.0 => Some(-p.normal),
-                            Some(p) => Some(p.normal),
-                            None => r.try_normalize().filter(|_| blocked),
-                        };
-                        // Split the correction by inverse mass when the partner is dynamic
-                        // too, unless the partner rests on a fixed or kinematic collider: its
-                        // share would push it into what supports it (seen: a thin dynamic plate
-                        // pushed 2.25 mm into the floor under it). The moving body then takes
-                        // it all, walked back along its own path as in the paper.
-                        let partner_mass = partner_body
-                            .and_then(|pb| world.bodies.get(pb))
-                            .filter(|b| b.is_dynamic())
-                            .filter(|_| !supported(world, ph))
-                            .map(|b| b.mass());
-                        let own_mass = world.bodies.get(bh).map_or(1.0, |b| b.mass());
-                        let share = match partner_mass {
-                            Some(mp) if mp > 0.0 && own_mass > 0.0 => {
-                                (1.0 / own_mass) / (1.0 / own_mass + 1.0 / mp)
-                            }
-                            _ => 1.0,
-                        };
-                        // The velocity into the partner, relative to it: removed as a plastic
-                        // impact along the normal would, shared as the correction is (momentum
-                        // conserved). Left as it was, it kept driving a body the guard held at
-                        // first touch, and whatever rested on it, deeper every step.
-                        let partner_v = partner_body
-                            .and_then(|pb| world.bodies.get(pb))
-                            .map_or(Vector::ZERO, |b| b.linvel());
-                        // A step undone almost whole (first touch right where it began) is a
-                        // blocked motion: what still closes along the way back goes too (a
-                        // body sliding into a concave corner of a TriMesh had velocity
-                        // tangent to the patch normal, and the guard held it there for good).
-                        let closing = n.and_then(|n| {
-                            let b = world.bodies.get(bh)?;
-                            let vrel = b.linvel() - partner_v;
-                            let mut dv = n * vrel.dot(n).min(0.0);
-                            if let Some(back) = r.try_normalize().filter(|_| blocked) {
-                                dv += back * (vrel - dv).dot(back).min(0.0);
-                            }
-                            (dv != Vector::ZERO && dv.is_finite()).then_some(dv)
-                        });
-                        if let Some(b) = world.bodies.get_mut(bh) {
-                            if turned {
-                                // A rotating path: the body goes to its pose at first touch
-                                // (its share of the way when the partner moves too).
-                                let rel = co_rel.unwrap_or(Pose::IDENTITY);
-                                let target = config.touch_pose * rel.inverse();
-                                let now = *b.position();
-                                let p = Pose::from_parts(
-                                    now.translation.lerp(target.translation, share),
-                                    now.rotation.slerp(target.rotation, share),
-                                );
-                                if p.is_finite() {
-                                    b.set_position(p, true);
-                                }
-                            } else {
-                                let t = b.translation() + r * share;
-                                if t.is_finite() {
-                                    b.set_translation(t, true);
-                                }
-                            }
-                            if let (Some(dv), true) = (closing, b.is_dynamic()) {
-                                b.set_linvel(b.linvel() - dv * share, true);
-                            }
-                        }
                         moved_bodies.push(bh);
-                        if let (Some(pb), true) = (partner_body, share < 1.0) {
-                            moved_bodies.push(pb);
-                            if let Some(b) = world.bodies.get_mut(pb) {
-                                let t = b.translation() - r * (1.0 - share);
-                                if t.is_finite() {
-                                    b.set_translation(t, true);
-                                }
-                                if let Some(dv) = closing {
-                                    b.set_linvel(b.linvel() + dv * (1.0 - share), true);
-                                }
-                            }
-                        }
+                        moved_bodies.extend(apply_correction(
+                            world,
+                            &config,
+                            (bh, co_rel, &pose_now),
+                            (ph, partner_body),
+                        ));
                         self.pair_states.insert(
                             (ch, ph),
                             PairState {
