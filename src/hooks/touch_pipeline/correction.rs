@@ -18,25 +18,22 @@ pub(super) fn apply_correction(
     let r = config.reversing_vector;
     // (A translation keeps the current orientation exactly.)
     let turned = config.touch_pose.rotation != pose_now.rotation;
-    // The contact normal, out of the partner toward this body, turned to
-    // the side the body came from (an open mesh's triangle normal may face
-    // either side). A configuration with no patch (a path that overlaps
-    // from its very start, undone whole) is blocked along the way back:
-    // that is its normal. Left without one, its velocity was never
-    // removed: eight cubes of the CCD scene lay frozen on the floor for
-    // hundreds of steps, walked back whole every step while gravity grew
-    // their speed to 36 m/s.
+    // The contact normal, out of the partner toward this body, turned to the side the body came
+    // from (an open mesh's triangle normal may face either side). A configuration with no patch
+    // (a path that overlaps from its very start, undone whole) is blocked along the way back:
+    // that is its normal. Left without one, its velocity was never removed: eight cubes of the
+    // CCD scene lay frozen on the floor for hundreds of steps, walked back whole every step
+    // while gravity grew their speed to 36 m/s.
     let blocked = config.time_of_impact.is_some_and(|t| t < 0.1);
     let n = match config.patches.first() {
         Some(p) if p.normal.dot(r) < 0.0 => Some(-p.normal),
         Some(p) => Some(p.normal),
         None => r.try_normalize().filter(|_| blocked),
     };
-    // Split the correction by inverse mass when the partner is dynamic
-    // too, unless the partner rests on a fixed or kinematic collider: its
-    // share would push it into what supports it (seen: a thin dynamic plate
-    // pushed 2.25 mm into the floor under it). The moving body then takes
-    // it all, walked back along its own path as in the paper.
+    // Split the correction by inverse mass when the partner is dynamic too, unless the partner
+    // rests on a fixed or kinematic collider: its share would push it into what supports it
+    // (seen: a thin dynamic plate pushed 2.25 mm into the floor under it). The moving body then
+    // takes it all, walked back along its own path as in the paper.
     let partner_mass = partner_body
         .and_then(|pb| world.bodies.get(pb))
         .filter(|b| b.is_dynamic())
@@ -47,17 +44,16 @@ pub(super) fn apply_correction(
         Some(mp) if mp > 0.0 && own_mass > 0.0 => (1.0 / own_mass) / (1.0 / own_mass + 1.0 / mp),
         _ => 1.0,
     };
-    // The velocity into the partner, relative to it: removed as a plastic
-    // impact along the normal would, shared as the correction is (momentum
-    // conserved). Left as it was, it kept driving a body the guard held at
-    // first touch, and whatever rested on it, deeper every step.
+    // The velocity into the partner, relative to it: removed as a plastic impact along the
+    // normal would, shared as the correction is (momentum conserved). Left as it was, it kept
+    // driving a body the guard held at first touch, and whatever rested on it, deeper every
+    // step.
     let partner_v = partner_body
         .and_then(|pb| world.bodies.get(pb))
         .map_or(Vector::ZERO, |b| b.linvel());
-    // A step undone almost whole (first touch right where it began) is a
-    // blocked motion: what still closes along the way back goes too (a
-    // body sliding into a concave corner of a TriMesh had velocity
-    // tangent to the patch normal, and the guard held it there for good).
+    // A step undone almost whole (first touch right where it began) is a blocked motion: what
+    // still closes along the way back goes too (a body sliding into a concave corner of a
+    // TriMesh had velocity tangent to the patch normal, and the guard held it there for good).
     let closing = n.and_then(|n| {
         let b = world.bodies.get(bh)?;
         let vrel = b.linvel() - partner_v;
@@ -69,8 +65,8 @@ pub(super) fn apply_correction(
     });
     if let Some(b) = world.bodies.get_mut(bh) {
         if turned {
-            // A rotating path: the body goes to its pose at first touch
-            // (its share of the way when the partner moves too).
+            // A rotating path: the body goes to its pose at first touch (its share of the way
+            // when the partner moves too).
             let rel = co_rel.unwrap_or(Pose::IDENTITY);
             let target = config.touch_pose * rel.inverse();
             let now = *b.position();
