@@ -8,7 +8,9 @@
 //! rendering gives a hand is tested in `haptic_energy.rs`.
 
 use crate::common::plate_scene;
-use rapier_touch::haptics::{haptic_link, Servo, ServoModel, SimulatedHand, VirtualCoupling};
+use rapier_touch::haptics::{
+    haptic_link, Servo, ServoLink, ServoModel, SimulatedHand, VirtualCoupling,
+};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::math::Matrix;
 use rapier_touch::rapier3d::prelude::*;
@@ -477,6 +479,22 @@ impl rapier_touch::haptics::HapticDevice for Scripted {
     }
 }
 
+/// The 0.3 m plate of the bad-input tests below, a 3 cm ball as its tool, linked to a servo
+/// whose end is returned.
+fn linked_plate() -> (PhysicsWorld, SurfaceSet, ColliderHandle, ServoLink) {
+    let (mut world, mut set, tool, _) =
+        plate_scene(0.3, 24, 400.0, 0.5, 4, SharedShape::ball(0.03));
+    let (world_end, servo_end) = haptic_link();
+    set.connect_haptic(tool, world_end, &mut world).unwrap();
+    (world, set, tool, servo_end)
+}
+
+/// The device at tick `t`: down from 2 cm over the plate to 1 cm into it over the first 500
+/// ticks, then held there.
+fn pressing_in(t: usize) -> Vector {
+    Vector::new(0.0, 0.02 + 0.03 * (1.0 - t as f32 / 500.0).max(0.0), 0.0)
+}
+
 #[test]
 fn a_device_that_reads_nan_mid_press_gets_no_force_and_moves_no_tool() {
     // Pressed 1 cm into a plate, then the device reads NaN (a dropped USB frame) for 200
@@ -484,18 +502,14 @@ fn a_device_that_reads_nan_mid_press_gets_no_force_and_moves_no_tool() {
     // where it was, and the press is felt again after.
     // With the passivity controller off and on.
     for passive in [false, true] {
-        let (mut world, mut set, tool, _) =
-            plate_scene(0.3, 24, 400.0, 0.5, 4, SharedShape::ball(0.03));
-        let (world_end, servo_end) = haptic_link();
-        set.connect_haptic(tool, world_end, &mut world).unwrap();
+        let (mut world, mut set, tool, servo_end) = linked_plate();
         let device = Scripted {
             tick: 0,
             pose: |t| {
                 if (2000..2200).contains(&t) {
                     Vector::splat(f32::NAN)
                 } else {
-                    // Down from 2 cm over the plate to 1 cm into it over the first 500 ticks.
-                    Vector::new(0.0, 0.02 + 0.03 * (1.0 - t as f32 / 500.0).max(0.0), 0.0)
+                    pressing_in(t)
                 }
             },
             forces: Vec::new(),
@@ -541,13 +555,10 @@ fn a_coupling_of_no_stiffness_renders_nothing_and_no_nan_with_the_passivity_cont
     // Zero, negative and NaN coupling stiffness: the controller's spring energy and its
     // bounded step must not divide by zero or pass a NaN on; the device gets no force.
     for stiffness in [0.0, -5.0, f32::NAN] {
-        let (mut world, mut set, tool, _) =
-            plate_scene(0.3, 24, 400.0, 0.5, 4, SharedShape::ball(0.03));
-        let (world_end, servo_end) = haptic_link();
-        set.connect_haptic(tool, world_end, &mut world).unwrap();
+        let (mut world, mut set, tool, servo_end) = linked_plate();
         let device = Scripted {
             tick: 0,
-            pose: |t| Vector::new(0.0, 0.02 + 0.03 * (1.0 - t as f32 / 500.0).max(0.0), 0.0),
+            pose: pressing_in,
             forces: Vec::new(),
         };
         let coupling = VirtualCoupling {
