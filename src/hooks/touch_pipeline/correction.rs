@@ -6,6 +6,12 @@ use super::rapier_contacts::supported;
 use super::*;
 use crate::geometry::ContactConfiguration;
 
+/// Whether `config` walks its body back almost the whole step (its first touch in the first
+/// tenth of the step): a blocked motion.
+pub(super) fn undone_almost_whole(config: &ContactConfiguration) -> bool {
+    config.time_of_impact.is_some_and(|t| t < 0.1)
+}
+
 /// Moves body `bh` (its collider's offset `co_rel`, the collider's pose now `pose_now`) by the
 /// correction `config` against collider `ph` (on body `partner_body`), and removes the
 /// velocity into the partner. Returns the partner's body when it took a share of the way.
@@ -24,7 +30,7 @@ pub(super) fn apply_correction(
     // that is its normal. Left without one, its velocity was never removed: eight cubes of the
     // CCD scene lay frozen on the floor for hundreds of steps, walked back whole every step
     // while gravity grew their speed to 36 m/s.
-    let blocked = config.time_of_impact.is_some_and(|t| t < 0.1);
+    let blocked = undone_almost_whole(config);
     let n = match config.patches.first() {
         Some(p) if p.normal.dot(r) < 0.0 => Some(-p.normal),
         Some(p) => Some(p.normal),

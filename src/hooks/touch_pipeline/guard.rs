@@ -2,7 +2,7 @@
 //! went through something) back to first touch; then the moved bodies' colliders are synced
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
-use super::correction::apply_correction;
+use super::correction::{apply_correction, undone_almost_whole};
 use super::pair_view::{parry_depth, push_out, safe_step, PairState, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
@@ -430,8 +430,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             };
                             let blocked_at_start = config.on_trajectory
                                 && partner.shape().is_convex()
-                                && ((overlapped && config.time_of_impact.is_some_and(|t| t < 0.1))
-                                    || rolling());
+                                && ((overlapped && undone_almost_whole(&config)) || rolling());
                             let along_normal = if (config.on_trajectory && !blocked_at_start)
                                 || !config.needs_correction()
                             {
@@ -477,14 +476,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             travel + resting.map_or(0.0, |r| r.depth_at_start) + resting_slop;
                         let config = match (&along_normal, on_path) {
                             (_, true) => config,
-                            (Some(c), false)
-                                if c.depth <= target + 0.1 * slop
-                                    && c.depth <= deepest_possible
-                                    && !partner_dynamic =>
-                            {
-                                continue;
-                            }
                             (Some(c), false) if c.depth <= deepest_possible && !partner_dynamic => {
+                                if c.depth <= target + 0.1 * slop {
+                                    continue;
+                                }
                                 let keep = target / c.depth;
                                 let mut c = c.clone();
                                 c.reversing_vector *= 1.0 - keep;
