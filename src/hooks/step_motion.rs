@@ -33,6 +33,13 @@ pub(crate) fn collider_reach(
             .map_or_else(|| shape_reach(co.shape()), |m| m.reach)
 }
 
+/// How far a point `reach` from a body's origin can have moved when the body went from
+/// `prev` to `now`: the translation plus the arc of the rotation.
+pub(crate) fn point_travel(prev: &Pose, now: &Pose, reach: crate::math::Real) -> crate::math::Real {
+    (now.translation - prev.translation).length()
+        + prev.rotation.angle_between(now.rotation) * reach
+}
+
 /// The motion of a body over the last step (zero without history).
 pub(crate) fn body_motion(
     prev_poses: &PoseHistory,

@@ -1,17 +1,14 @@
 //! [`TouchHooks`]: rapier `PhysicsHooks` that replace the solver's view of a penetrating pair by
 //! the reconstructed first-touch configuration.
 
+use super::pose_history::PoseHistory;
+use super::step_motion::{relative_motion, relative_travel};
 use crate::geometry::{ContactConfiguration, ReconstructionOptions, Reconstructor, TouchMesh};
 use crate::math::{Pose, Vector};
 use rapier3d::dynamics::RigidBodySet;
 use rapier3d::geometry::{ColliderHandle, ColliderSet, SolverFlags};
 use rapier3d::pipeline::{ContactModificationContext, PairFilterContext, PhysicsHooks};
 // parry's hash map (hashbrown with foldhash), as rapier uses: SipHash was 4.5 % of a pile's step.
-use super::pose_history::PoseHistory;
-pub(crate) use super::step_motion::{
-    body_motion, collider_reach, previous_collider_pose, relative_motion, relative_travel,
-    shape_reach,
-};
 use parry3d::utils::hashmap::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};

@@ -5,9 +5,9 @@ use super::events::{self, PairTouchEvent, PairTracker};
 use super::pair_filter::{rapier_solves_pair, user_removes_contact};
 use super::pose_history::PoseHistory;
 use super::report::{PairReport, ToolFeedback};
+use super::step_motion::{body_motion, collider_reach, previous_collider_pose, shape_reach};
 use super::touch_hooks::{
-    body_motion, collider_reach, meshed_exactly, pair_configuration, previous_collider_pose,
-    shape_key, shape_reach, CachedMesh, ShapeKey, TouchHooks,
+    meshed_exactly, pair_configuration, shape_key, CachedMesh, ShapeKey, TouchHooks,
 };
 use crate::coupling::SurfaceSet;
 use crate::geometry::{

@@ -3,7 +3,7 @@
 //! rapier recomputes every hooked pair's contacts every step.
 
 use super::*;
-use crate::hooks::touch_hooks::collider_reach;
+use crate::hooks::step_motion::{collider_reach, point_travel};
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// With [`TouchOptions::hook_flags_on_demand`]: raises the hook flag on the managed
@@ -28,11 +28,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
                     // A body that did not move (a sleeping pile's) is not measured.
                     (Some(b), Some(prev)) if b.position() != prev => {
-                        let now = b.position();
-                        (now.translation - prev.translation).length()
-                            + prev.rotation.angle_between(now.rotation)
-                                * collider_reach(&self.hooks.meshes, *h, co)
-                            > slop
+                        let reach = collider_reach(&self.hooks.meshes, *h, co);
+                        point_travel(prev, b.position(), reach) > slop
                     }
                     _ => false,
                 }

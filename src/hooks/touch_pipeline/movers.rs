@@ -2,7 +2,7 @@
 //! contact was last measured (the odometers that let calm pairs go unmeasured).
 
 use super::*;
-use crate::hooks::touch_hooks::collider_reach;
+use crate::hooks::step_motion::{collider_reach, point_travel};
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// Advances the odometers (the distance every point of each moving body may have
@@ -28,8 +28,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 .filter_map(|c| Some((*c, world.colliders.get(*c)?)))
                 .map(|(c, co)| collider_reach(&self.hooks.meshes, c, co))
                 .fold(0.0, Real::max);
-            let step = (pose.translation - prev.translation).length()
-                + prev.rotation.angle_between(pose.rotation) * radius;
+            let step = point_travel(prev, pose, radius);
             if step > 0.0 && step.is_finite() {
                 *self.odometers.entry(h).or_insert(0.0) += step;
             }
