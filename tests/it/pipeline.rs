@@ -339,7 +339,8 @@ fn fast_trimesh_body_does_not_tunnel() {
 
 /// Degenerate worlds through the pipeline, in both opt-in modes, against vanilla rapier on the
 /// same world: a massless dynamic body (density 0) sunk into the floor, a zero-size cuboid, a
-/// body with a NaN velocity, a body with an infinite angular velocity, and `dt = 0`. The
+/// body with a NaN velocity, a body with an infinite angular velocity, a cone with a NaN spin,
+/// a rolling ball of no size, and `dt = 0`. The
 /// pipeline never panics; every body vanilla rapier keeps finite stays finite (the guard hands
 /// no NaN to rapier); with `dt = 0` nothing moves, so nothing is corrected.
 #[test]
@@ -387,6 +388,20 @@ fn degenerate_bodies_and_zero_dt_neither_panic_nor_hand_nan_to_rapier() {
                 Vector::new(0.0, -5.0, 0.0),
                 Vector::new(f32::INFINITY, 0.0, 0.0),
                 ColliderBuilder::cuboid(0.25, 0.25, 0.25),
+            ),
+            // Curved shapes (the guard's rolling and spinning rules): a cone resting on its
+            // side with a NaN spin, and a ball of no size rolling on the floor.
+            add(
+                Vector::new(-2.0, 0.25, 2.0),
+                Vector::ZERO,
+                Vector::new(0.0, f32::NAN, 3.0),
+                ColliderBuilder::cone(0.25, 0.25).rotation(Vector::new(0.0, 0.0, 1.1)),
+            ),
+            add(
+                Vector::new(2.0, 0.0, 2.0),
+                Vector::new(1.0, -1.0, 0.0),
+                Vector::new(0.0, 0.0, -5.0),
+                ColliderBuilder::ball(0.0),
             ),
         ];
         (w, bodies)
