@@ -44,15 +44,19 @@ fn solve_on(
     tol: f64,
 ) -> Option<(nalgebra::DVector<f64>, Vec<bool>)> {
     let m = b.len();
-    let mut priority: Vec<usize> = (0..m).collect();
-    priority.sort_by(|&i, &j| push_only(i).cmp(&push_only(j)).then(b[j].total_cmp(&b[i])));
     // A push-only row starts out unless `starts_in` says (the caller's guess: it asks for a
     // push, or it pushed at the last solve); a row out comes in if the others' pushes violate
     // it, a row in that pulls goes out.
     let mut active: Vec<bool> = (0..m).map(|i| !push_only(i) || starts_in(i)).collect();
     let mut redundant = vec![false; m];
     let mut x = nalgebra::DVector::<f64>::zeros(m);
-    let first: Vec<usize> = priority.iter().copied().filter(|&i| active[i]).collect();
+    // The rows in, in priority order (ties by index).
+    let mut first: Vec<(bool, f64, usize)> = (0..m)
+        .filter(|&i| active[i])
+        .map(|i| (push_only(i), b[i], i))
+        .collect();
+    first.sort_unstable_by(|p, q| p.0.cmp(&q.0).then(q.1.total_cmp(&p.1)).then(p.2.cmp(&q.2)));
+    let first: Vec<usize> = first.into_iter().map(|(_, _, i)| i).collect();
     for i in chol.factorize(a, &first) {
         redundant[i] = true;
         active[i] = false;
@@ -147,6 +151,16 @@ pub(super) fn give_back(storage: &mut Vec<f64>, m: nalgebra::DMatrix<f64>) {
 /// its diagonal (an angle of about 0.6° in `A`'s metric) repeats them.
 const REDUNDANT: f64 = 1e-4;
 
+/// Fewest rows [`Cholesky::factorize`] hands to faer's blocked factorization. Measured on
+/// this machine, a system gathered and factorized by faer against appended row by row: 8 rows
+/// 0.25 µs against 0.15, 12 rows 0.38 against 0.41, 16 rows 0.49 against 0.79, 30 rows 1.9
+/// against 5.3.
+const BLOCKED_FROM: usize = 16;
+
+/// How many rows found redundant [`Cholesky::factorize`] drops before it stops refactorizing
+/// the rest with faer and appends them one by one.
+const BLOCKED_RETRIES: usize = 3;
+
 /// The Cholesky factor `L` of `A` on the rows kept, in their order (the workspace is reused).
 ///
 /// Hand-written rather than faer's: it leaves out, in priority order, the rows that nearly
@@ -196,8 +210,72 @@ impl Cholesky {
     /// Factorizes `A` on `rows`, in order, leaving out the rows that nearly repeat those kept
     /// before them (returned).
     fn factorize(&mut self, a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> Vec<usize> {
-        self.kept.clear();
-        rows.iter().copied().filter(|&i| !self.push(a, i)).collect()
+        let mut left_out = Vec::new();
+        let mut rest = rows.to_vec();
+        // Blocked while it pays: each row found redundant is dropped and the rest factorized
+        // again (up to `BLOCKED_RETRIES` times), then the remaining rows are appended one by
+        // one.
+        for _ in 0..=BLOCKED_RETRIES {
+            self.kept.clear();
+            match self.factorize_blocked(a, &rest) {
+                Some(taken) if taken == rest.len() => return left_out,
+                Some(taken) => left_out.push(rest.remove(taken)),
+                None => {
+                    self.kept.clear();
+                    break;
+                }
+            }
+        }
+        let start = self.kept.len();
+        left_out.extend(rest[start..].iter().copied().filter(|&i| !self.push(a, i)));
+        left_out
+    }
+
+    /// Factorizes `A` on `rows` with faer's dense Cholesky (blocked and vectorised) and keeps
+    /// its leading rows up to the first that nearly repeats those before it (the rows a
+    /// factorization in order would keep, in the same order: a Cholesky factor's leading rows
+    /// depend only on the leading rows of `A`); returns how many it kept, or `None` (nothing
+    /// kept) for a system too small to gain or one faer could not factorize (a pivot at or
+    /// below zero: the rows are then appended one by one, which leaves such a row out).
+    /// Measured on this machine: 70 rows in 10 µs against [`Cholesky::push`]'s 39 µs, 120
+    /// rows in 20 µs against 153 µs. On six cubes pressing a plate (about 75 rows per step)
+    /// the step's factorizations went from 25 to 22 µs: faer's own call is 15 µs there.
+    fn factorize_blocked(&mut self, a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> Option<usize> {
+        let (k, n) = (rows.len(), self.stride);
+        if k < BLOCKED_FROM || k > n {
+            return None;
+        }
+        // Factorized in place (its lower triangle; `Mat::llt` would copy it into a fresh
+        // matrix first).
+        let mut l = faer::Mat::<f64>::from_fn(k, k, |r, c| a[(rows[r], rows[c])]);
+        use faer::linalg::cholesky::llt::factor;
+        let mut mem = faer::dyn_stack::MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
+            k,
+            faer::Par::Seq,
+            Default::default(),
+        ));
+        factor::cholesky_in_place(
+            l.as_mut(),
+            Default::default(),
+            faer::Par::Seq,
+            faer::dyn_stack::MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
+        for (r, &i) in rows.iter().enumerate() {
+            let pivot = l[(r, r)];
+            // As in `push`: a pivot (squared) at or below `REDUNDANT` of its diagonal, or not
+            // a number, ends what is taken.
+            let squared = pivot * pivot;
+            if squared.is_nan() || squared <= REDUNDANT * a[(i, i)] || !pivot.is_finite() {
+                return Some(r);
+            }
+            for c in 0..=r {
+                self.l[r * n + c] = l[(r, c)];
+            }
+            self.kept.push(i);
+        }
+        Some(k)
     }
 
     /// Appends row `i` of `A` to the factor; `false` (and nothing appended) when it nearly

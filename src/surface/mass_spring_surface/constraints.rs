@@ -261,7 +261,9 @@ impl MassSpringSurface {
                 if active[i] {
                     continue;
                 }
-                let gap = (a.row(i).dot(&mu.transpose()) - k.1).max(0.0);
+                // Row i of the symmetric `a`, read down its column (contiguous, and no
+                // transposed copy of `mu` per press).
+                let gap = (a.column(i).dot(mu) - k.1).max(0.0);
                 let velocity: f64 =
                     k.0.entries()
                         .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
