@@ -163,8 +163,9 @@ const BLOCKED_RETRIES: usize = 3;
 
 /// The Cholesky factor `L` of `A` on the rows kept, in their order (the workspace is reused).
 ///
-/// Hand-written rather than faer's: it leaves out, in priority order, the rows that nearly
-/// repeat those kept before them, which a plain factorization cannot, and `solve_pushing`
+/// Kept by hand around faer's factorization: it leaves out, in priority order, the rows that
+/// nearly repeat those kept before them, which a plain factorization cannot (the first
+/// factorization is faer's, cut at such a row: [`Cholesky::factorize`]), and `solve_pushing`
 /// changes its active set by updating the factor (a row appended, a row removed by Givens
 /// rotations) rather than refactorizing each pass. With that and four-way dot products, six
 /// cubes pressing a 784-node plate (`cargo bench --bench coupled_step`: about 109 rows and
