@@ -383,3 +383,108 @@ impl Cholesky {
         x
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `(row, of, scale, nudge)`: row `row` of `B` set to `scale ×` row `of` plus `nudge` in
+    /// one entry.
+    type Repeat = (usize, usize, f64, f64);
+
+    /// A symmetric positive semi-definite `m × m` matrix `B Bᵀ` (plus a small diagonal), with
+    /// rows `copies` made (near) repeats of earlier rows.
+    fn system(m: usize, seed: u64, copies: &[Repeat]) -> nalgebra::DMatrix<f64> {
+        let mut r = seed;
+        let mut rnd = move || {
+            r = r
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (r >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut b = nalgebra::DMatrix::<f64>::from_fn(m, m + 3, |_, _| rnd());
+        for &(row, of, scale, nudge) in copies {
+            let copy = b.row(of) * scale;
+            b.set_row(row, &copy);
+            b[(row, row % (m + 3))] += nudge;
+        }
+        let mut a = &b * b.transpose();
+        let diag = (0..m).map(|i| a[(i, i)]).fold(0.0, f64::max);
+        for i in 0..m {
+            a[(i, i)] += 1e-12 * diag;
+        }
+        a
+    }
+
+    /// Row by row, as before the blocked path: the reference.
+    fn appended(a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> (Cholesky, Vec<usize>) {
+        let m = a.nrows();
+        let mut chol = Cholesky::new(m, Vec::new());
+        let left: Vec<usize> = rows.iter().copied().filter(|&i| !chol.push(a, i)).collect();
+        (chol, left)
+    }
+
+    #[test]
+    fn the_blocked_factorization_keeps_and_leaves_out_what_appending_row_by_row_does() {
+        let cases: [(usize, &[Repeat]); 6] = [
+            (10, &[]),
+            (40, &[]),
+            (40, &[(17, 3, 1.0, 0.0)]),
+            (
+                75,
+                &[(5, 2, -2.0, 0.0), (30, 29, 1.0, 1e-9), (60, 5, 0.5, 0.0)],
+            ),
+            // More repeats than the blocked path retries: the rest is appended.
+            (
+                60,
+                &[
+                    (20, 1, 1.0, 0.0),
+                    (21, 2, 1.0, 0.0),
+                    (22, 3, 1.0, 0.0),
+                    (23, 4, 1.0, 0.0),
+                    (24, 5, 1.0, 0.0),
+                ],
+            ),
+            // A row that is not a repeat (nudged by 0.1): kept by both.
+            (50, &[(40, 10, 1.0, 0.1)]),
+        ];
+        for (seed, (m, copies)) in cases.into_iter().enumerate() {
+            let a = system(m, seed as u64 + 1, copies);
+            // A priority order that is not the index order.
+            let rows: Vec<usize> = (0..m).rev().collect();
+            let (reference, left_ref) = appended(&a, &rows);
+            let mut chol = Cholesky::new(m, Vec::new());
+            let mut left = chol.factorize(&a, &rows);
+            let mut left_sorted = left_ref.clone();
+            left.sort_unstable();
+            left_sorted.sort_unstable();
+            assert_eq!(left, left_sorted, "m {m}: rows left out");
+            assert_eq!(
+                chol.kept, reference.kept,
+                "m {m}: rows kept and their order"
+            );
+            for (r, _) in chol.kept.iter().enumerate() {
+                for c in 0..=r {
+                    let (x, y) = (chol.l[r * m + c], reference.l[r * m + c]);
+                    assert!(
+                        (x - y).abs() <= 1e-8 * (1.0 + y.abs()),
+                        "m {m}: L[{r}, {c}] {x} against {y}"
+                    );
+                }
+            }
+            // The factor solves the kept system.
+            let b = nalgebra::DVector::from_fn(m, |i, _| (i as f64).sin());
+            let x = chol.solve(&b);
+            for (r, &i) in chol.kept.iter().enumerate() {
+                let ax: f64 = chol.kept.iter().zip(&x).map(|(&j, v)| a[(i, j)] * v).sum();
+                assert!(
+                    (ax - b[i]).abs() <= 1e-6 * (1.0 + b[i].abs()),
+                    "m {m}: row {r}"
+                );
+            }
+            if !copies.is_empty() && copies.iter().all(|c| c.3 < 1e-6) {
+                assert!(!left.is_empty(), "m {m}: the repeated rows are left out");
+            }
+        }
+    }
+}
