@@ -221,10 +221,8 @@ impl Cholesky {
             match self.factorize_blocked(a, &rest) {
                 Some(taken) if taken == rest.len() => return left_out,
                 Some(taken) => left_out.push(rest.remove(taken)),
-                None => {
-                    self.kept.clear();
-                    break;
-                }
+                // Nothing was kept: every row is appended below.
+                None => break,
             }
         }
         let start = self.kept.len();
