@@ -485,4 +485,25 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn a_row_of_nan_is_left_out_by_both_factorizations_and_the_rest_kept() {
+        let m = 40;
+        let mut a = system(m, 7, &[]);
+        for j in 0..m {
+            a[(12, j)] = f64::NAN;
+            a[(j, 12)] = f64::NAN;
+        }
+        let rows: Vec<usize> = (0..m).collect();
+        let (reference, left_ref) = appended(&a, &rows);
+        let mut chol = Cholesky::new(m, Vec::new());
+        let left = chol.factorize(&a, &rows);
+        assert_eq!(left_ref, vec![12]);
+        assert_eq!(left, vec![12]);
+        assert_eq!(chol.kept, reference.kept);
+        // The factor's rows (by position) are finite.
+        for k in 0..chol.kept.len() {
+            assert!(chol.l[k * m..k * m + k + 1].iter().all(|v| v.is_finite()));
+        }
+    }
 }
