@@ -54,6 +54,35 @@ pub(super) fn safe_step(mesh: &TouchMesh, partner_mesh: &TouchMesh) -> Real {
     }
 }
 
+/// Whether `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by less than `gap` along
+/// the unit direction `n` (out of `partner` toward `mover`), from the two shapes' support
+/// points alone: the highest point of `partner` along `n` less the lowest of `mover`. The
+/// overlap along any direction bounds the depth from above, so `true` means the pair is less
+/// than `gap` deep, and the mover lifted by `gap` along `n` is apart (what parry's
+/// intersection test would find there, at two support queries instead of a GJK run). `false`
+/// when either shape has no support map (a TriMesh, a compound) or the answer is not finite.
+/// Computed in `partner`'s frame, as parry's pair queries are (no rounding of world
+/// coordinates far from the origin).
+pub(super) fn within_along(
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (mover, pose): (&rapier3d::geometry::Collider, &Pose),
+    n: Vector,
+    gap: Real,
+) -> bool {
+    let (Some(sp), Some(sm)) = (
+        partner.shape().as_support_map(),
+        mover.shape().as_support_map(),
+    ) else {
+        return false;
+    };
+    let rel = partner_pose.inv_mul(pose);
+    let n = partner_pose.rotation.inverse() * n;
+    let top = sp.local_support_point_toward(n).dot(n);
+    let bottom = sm.support_point_toward(&rel, -n).dot(n);
+    let overlap = top - bottom;
+    overlap.is_finite() && overlap < gap
+}
+
 /// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
 /// query with a prediction of 0: 0 for shapes apart (parry answers `None`), minus the
 /// distance of the contact it answers (negative for a positive distance, one of its wrong
@@ -92,4 +121,81 @@ pub(super) fn push_out(
     }
     rec.reconstruct(partner_mesh, partner_pose, mesh, pose, pose)
         .ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rotation;
+    use rapier3d::geometry::{ColliderBuilder, SharedShape};
+
+    /// `within_along` never lets a pair go that parry's intersection test, with the mover
+    /// lifted by the gap along the axis, still finds overlapping; and it lets go the pairs that
+    /// are apart along the axis by more than a rounding (it is not a test that never answers).
+    #[test]
+    fn a_pair_within_the_gap_along_the_axis_is_apart_once_lifted_by_it() {
+        let points = [
+            Vector::new(0.0, 0.0, 0.0),
+            Vector::new(1.0, 0.1, 0.0),
+            Vector::new(0.2, 0.9, 0.1),
+            Vector::new(0.1, 0.2, 1.0),
+            Vector::new(0.8, 0.7, 0.6),
+        ];
+        let shapes = [
+            SharedShape::cuboid(0.5, 0.2, 0.3),
+            SharedShape::ball(0.4),
+            SharedShape::capsule_y(0.3, 0.1),
+            SharedShape::round_convex_hull(&points, 0.05).unwrap(),
+            SharedShape::cylinder(0.2, 0.5),
+        ];
+        let floor = ColliderBuilder::cuboid(1.0, 0.5, 1.0).build();
+        let floor_pose = Pose::from_translation(Vector::new(0.3, -0.5, -0.2));
+        let (mut let_go, mut kept) = (0, 0);
+        for (i, shape) in shapes.iter().enumerate() {
+            let mover = ColliderBuilder::new(shape.clone()).build();
+            for k in 0..40 {
+                let t = k as Real;
+                let turn = Rotation::from_axis_angle(
+                    Vector::new((0.7 * t).sin(), 1.0, (1.3 * t).cos()).normalize(),
+                    0.37 * t + i as Real,
+                );
+                // From 5 cm apart down to 5 cm deep (the turned shape's lowest point on the
+                // floor's top at 0), along tilted axes.
+                let lowest = shape.compute_aabb(&Pose::from_rotation(turn)).mins.y;
+                let height = -lowest - 0.05 + 0.1 * (k % 11) as Real / 10.0;
+                let pose = Pose::from_parts(Vector::new(0.1 * (k % 5) as Real, height, 0.0), turn);
+                // rapier's normal, as far off the floor's as a rounded shape's can be.
+                let n =
+                    Vector::new(0.002 * (k % 3) as Real, 1.0, -0.001 * (k % 4) as Real).normalize();
+                let gap = 0.01;
+                if within_along((&floor, &floor_pose), (&mover, &pose), n, gap) {
+                    let_go += 1;
+                    let lifted = Pose::from_parts(pose.translation + n * gap, pose.rotation);
+                    let overlaps = parry3d::query::intersection_test(
+                        &floor_pose,
+                        floor.shape(),
+                        &lifted,
+                        mover.shape(),
+                    )
+                    .unwrap();
+                    assert!(!overlaps.intersecting, "shape {i}, case {k}");
+                } else {
+                    kept += 1;
+                }
+            }
+        }
+        assert!(let_go > 40 && kept > 40, "{let_go} let go, {kept} kept");
+        // A mesh shape has no support map: never let go from this test.
+        let mesh =
+            ColliderBuilder::trimesh(vec![Vector::ZERO, Vector::X, Vector::Z], vec![[0, 1, 2]])
+                .unwrap()
+                .build();
+        let far = Pose::from_translation(Vector::new(0.0, 10.0, 0.0));
+        assert!(!within_along(
+            (&floor, &floor_pose),
+            (&mesh, &far),
+            Vector::Y,
+            0.01
+        ));
+    }
 }
