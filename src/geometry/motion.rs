@@ -265,11 +265,19 @@ impl Reconstructor {
         } else if !sub.needs_correction() {
             (pa, 1.0)
         } else {
-            // `pb` is within the tolerance of first touch: the touching features there, from
-            // a zero-length query.
-            sub = self
-                .translate_back(fixed, pos_fixed, moving, &pb, &pb)
-                .unwrap_or(separated.clone());
+            // `pb` is within the tolerance of first touch: the features touching there. For
+            // two convex meshes a zero-length translation query answers from GJK (its convex
+            // path); otherwise it would walk the whole overlap of the boxes along a fallback
+            // direction (see `touching_at`).
+            sub = if self.options.convex_fast_path && fixed.is_convex() && moving.is_convex() {
+                self.translate_back(fixed, pos_fixed, moving, &pb, &pb)
+                    .unwrap_or(separated.clone())
+            } else {
+                // Looked at along the sub-step's own contact normal where it has one.
+                let normal = sub.patches.first().map(|p| -p.normal.as_dvec3());
+                let along = normal.into_iter().chain([u_world]);
+                self.touching_at(fixed, pos_fixed, moving, &pb, along, tol)
+            };
             (pb, 0.0)
         };
         let tau_star = tau_b - t_sub * (tau_b - tau_a);

@@ -103,3 +103,86 @@ proptest! {
         }
     }
 }
+
+/// A flat grid floor (top at y = 0) of `n` × `n` square cells of side `cell`, its corner at
+/// (`x0`, `z0`): an open mesh, so the reconstruction walks its triangles.
+fn grid_floor(n: u32, cell: f32, x0: f32, z0: f32) -> TouchMesh {
+    let mut vertices = Vec::new();
+    for i in 0..=n {
+        for j in 0..=n {
+            vertices.push(Vector::new(x0 + cell * i as f32, 0.0, z0 + cell * j as f32));
+        }
+    }
+    let at = |i: u32, j: u32| i * (n + 1) + j;
+    let mut indices = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            indices.push([at(i, j), at(i, j + 1), at(i + 1, j)]);
+            indices.push([at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)]);
+        }
+    }
+    TouchMesh::new(vertices, indices).unwrap()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// A cube resting face down on a wide open floor (touching it when the step began), at
+    /// scales from 1 mm to 1 km, turns about a horizontal axis through its centre, so that an
+    /// edge or corner dips into the floor. Its first touch is where the step began: the reconstruction reports a touch
+    /// pose at the start, not penetrating the floor (the cube's corners at or above its top)
+    /// and touching it, with its contact points on the floor's top and on the cube there, and
+    /// a depth no less than the dipping corner's.
+    /// Checked on the geometry written here; the floor's centre lies far to one side (tens of
+    /// metres), where a query looking toward it ran sideways across the floor and reported
+    /// features far from the cube.
+    #[test]
+    fn a_cube_turning_from_rest_into_a_wide_floor_touches_where_it_rested(
+        axis_angle in 0.0f32..std::f32::consts::TAU, turn in 0.05f32..0.6,
+        x in -3.0f32..3.0, z in -3.0f32..3.0, x0 in -90.0f32..-10.0, z0 in -90.0f32..-10.0,
+        exp in -3.0f32..3.0,
+    ) {
+        // Everything scaled by k (a 1 mm cube on a 0.2 m floor to a 1 km one on 200 km).
+        let k = 10f32.powf(exp);
+        let (x, z, x0, z0) = (x * k, z * k, x0 * k, z0 * k);
+        let half = 0.5 * k;
+        let cube = Cuboid::new(Vector::splat(half));
+        let moving = TouchMesh::from_shape(&cube).unwrap();
+        let side = 2.0 * x0.abs().max(z0.abs()) + 20.0 * k;
+        let floor = grid_floor(24, side / 24.0, x0, z0);
+        let start = Pose::from_translation(Vector::new(x, half, z));
+        let axis = Vector::new(axis_angle.cos(), 0.0, axis_angle.sin());
+        let end = Pose::from_parts(start.translation, Rotation::from_axis_angle(axis, turn));
+        let motion = RigidMotion::new(start, end, Vector::ZERO);
+        let c = Reconstructor::default()
+            .reconstruct_motion(&floor, &Pose::IDENTITY, &moving, &motion)
+            .unwrap();
+        // The reconstruction's tolerance is relative to the larger mesh (1e-6 of its scale by
+        // default): ten of them here, 1-2 mm on a 100-200 m floor at unit scale.
+        let eps = 1e-5 * side;
+        let corners = |p: &Pose| -> Vec<Vector> {
+            (0..8)
+                .map(|i| {
+                    let s = |b: u32| if i & b == 0 { -half } else { half };
+                    p.transform_point(Vector::new(s(1), s(2), s(4)))
+                })
+                .collect()
+        };
+        let lowest = |p: &Pose| corners(p).iter().map(|v| v.y).fold(f32::MAX, f32::min);
+        prop_assert!(lowest(&end) < -1e-3 * k, "the turn dips a corner in");
+        prop_assert!(c.needs_correction(), "{c:?}");
+        let touch = c.touch_pose;
+        let low = lowest(&touch);
+        prop_assert!(low >= -eps, "touch pose {low} m into the floor: {c:?}");
+        prop_assert!(low <= eps, "touch pose apart by {low} m: {c:?}");
+        prop_assert!(!c.patches.is_empty());
+        // Its depth: how far the touching points went past first touch, at least as far as
+        // the deepest corner now is below the floor.
+        prop_assert!(c.depth >= -lowest(&end) - eps, "depth {} for a corner {} m under: {c:?}", c.depth, -lowest(&end));
+        for p in c.patches.iter().flat_map(|p| p.points.iter()) {
+            prop_assert!(p.point.y.abs() <= eps, "contact point {} off the floor", p.point);
+            let on_cube = parry3d::query::PointQuery::distance_to_point(&cube, &touch, p.point, false);
+            prop_assert!(on_cube <= eps, "contact point {} is {on_cube} m from the cube", p.point);
+        }
+    }
+}
