@@ -5,7 +5,9 @@
 use super::holding::attached_with_pose;
 use super::surface_set::AttachedSurface;
 use super::surface_set::{CouplingError, SurfaceSet};
-use crate::haptics::{positive_part, PatchVertex, ServoModel, WorldLink, MAX_PATCH};
+use crate::haptics::{
+    is_smooth, normal_at, positive_part, HeldVertex, PatchVertex, ServoModel, WorldLink, MAX_PATCH,
+};
 use crate::math::{Matrix, Pose, Real, Vector};
 use parry3d::bounding_volume::Aabb;
 use rapier3d::dynamics::RigidBodySet;
@@ -137,11 +139,6 @@ impl SurfaceSet {
                     let r = &t.reaction;
                     (r.force, t.grasp, r.held_vertices + r.pressed_points)
                 });
-            let force = if force.is_finite() {
-                force
-            } else {
-                Vector::ZERO
-            };
             let Some(state) = self.links.get(&h) else {
                 continue;
             };
@@ -161,6 +158,17 @@ impl SurfaceSet {
                 } else {
                     secant(&state.last, &pose, force, &shape, touched)
                 };
+            // A smooth tool's held vertices, each with its share of the normal stiffness.
+            let held_vertices = match self.tools.get(&h) {
+                Some(t)
+                    if force != Vector::ZERO
+                        && is_smooth(shape.as_ref())
+                        && t.held.len() <= MAX_ANCHORED =>
+                {
+                    held_vertices(&t.held, shape.as_ref(), &pose, &stiffness)
+                }
+                _ => Vec::new(),
+            };
             let patch = if force == Vector::ZERO {
                 patch_near(self, world, &shape, &pose)
             } else {
@@ -174,6 +182,7 @@ impl SurfaceSet {
                 grasping,
                 shape: Some(shape),
                 patch,
+                held: held_vertices,
                 attached: true,
             };
             if let Some(state) = self.links.get_mut(&h) {
@@ -216,8 +225,9 @@ fn secant(
     if s.length() <= (1e-3 * size).max(1e-7) {
         return last.stiffness;
     }
-    // K s should be the drop of force along s: y = f_last - f.
-    let y = last.force - force;
+    // K s should be the drop of force along s that the turning normals do not account for:
+    // y = f_last + turning - f.
+    let y = last.force + last.turning(x) - force;
     let k = last.stiffness;
     let r = y - k * s;
     let ss = s.dot(s);
@@ -229,6 +239,65 @@ fn secant(
     } else {
         k
     }
+}
+
+/// The most vertices a smooth tool may hold for the servo model to anchor them
+/// ([`HeldVertex`]): a contact of a few vertices (a tool on a coarse mesh) is discrete, and
+/// how its normals turn as the tool moves is most of how its force changes; a contact of many
+/// is a patch whose force changes smoothly, and the linear secant alone follows it. Anchoring
+/// every vertex of the 99,848-node sphere's contact (`examples/haptic_thread.rs`) made the
+/// servo's force jump by 4.6-27.6 % of the peak between ticks in two of four runs (their
+/// normals' turning pushes the ball on, which the contact's spread of loads holds back); with
+/// this limit it jumped by 2.0-2.7 % in five (2.7 % before the anchors).
+const MAX_ANCHORED: usize = 4;
+
+/// The vertices a smooth tool at `pose` holds (`held`: each one's position and force on the
+/// tool), as the servo model reads them: the tool's normal at each, its normal load, its
+/// share of the contact's normal stiffness (by load, from `stiffness` along its normal) and
+/// its anchor's depth. A vertex whose anchor would not come back to it at `pose` (deeper than
+/// the tool is round there) keeps its load and only turns. Most [`MAX_PATCH`], the most
+/// loaded.
+fn held_vertices(
+    held: &[(Vector, Vector)],
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    stiffness: &Matrix,
+) -> Vec<HeldVertex> {
+    let mut out: Vec<HeldVertex> = held
+        .iter()
+        .filter_map(|&(position, f)| {
+            let normal = normal_at(shape, pose, position)?;
+            let load = -f.dot(normal);
+            (load > 0.0 && load.is_finite()).then_some(HeldVertex {
+                position,
+                load,
+                normal,
+                stiffness: 0.0,
+                depth: 0.0,
+            })
+        })
+        .collect();
+    if out.len() > MAX_PATCH {
+        out.select_nth_unstable_by(MAX_PATCH, |a, b| b.load.total_cmp(&a.load));
+        out.truncate(MAX_PATCH);
+    }
+    let total: Real = out.iter().map(|v| v.load).sum();
+    let half = shape.compute_local_aabb().half_extents();
+    let deepest = 0.25 * half.min_element();
+    for v in &mut out {
+        let s = v.load / total * v.normal.dot(*stiffness * v.normal);
+        if !(s > 0.0 && s.is_finite()) {
+            continue;
+        }
+        let depth = (v.load / s).min(deepest);
+        let anchor = v.position - v.normal * depth;
+        let back = shape.project_point(pose, anchor, false).point;
+        if (back - v.position).length() <= 1e-3 * half.max_element() {
+            v.stiffness = s;
+            v.depth = depth;
+        }
+    }
+    out
 }
 
 /// `a bᵀ`.

@@ -49,17 +49,21 @@ pub(super) struct ToolMotion {
     pub grasp: bool,
 }
 
+/// Vertices a tool holds: each one's position and the force it puts on the tool (world).
+pub(super) type HeldContacts = Vec<(Vector, Vector)>;
+
 /// One surface substep: the surface steps, then each tool holds the vertices it contains, then
 /// each polyhedral tool presses its vertices and edges into the surface between the surface's
 /// vertices. Returns each tool's reaction (world): the holds' spring forces at the end of the
-/// substep plus the impulses the pressed points gave during it.
+/// substep plus the impulses the pressed points gave during it; and the vertices it holds,
+/// each with its position and force on the tool (world).
 pub(super) fn surface_substep(
     s: &mut AttachedSurface,
     world: &PhysicsWorld,
     body_pose: &Pose,
     tools: &[ToolMotion],
     h: Real,
-) -> Vec<(ColliderHandle, ToolReaction)> {
+) -> Vec<(ColliderHandle, ToolReaction, HeldContacts)> {
     let inv = body_pose.inverse();
     retarget_holds(&mut s.surface, &s.held_list, world, tools, &inv, h);
     s.surface.positions_into(&mut s.before);
@@ -145,6 +149,11 @@ pub(super) fn surface_substep(
         // Torque about the tool's centre of mass: Σ (p - c) × f, in world.
         let torque =
             body_pose.rotation * arm_sum - (centre - body_pose.translation).cross(world_force);
+        let contacts = holds
+            .contacts
+            .iter()
+            .map(|&(p, f)| (body_pose.transform_point(p), body_pose.rotation * f))
+            .collect();
         out.push((
             t.handle,
             ToolReaction {
@@ -155,6 +164,7 @@ pub(super) fn surface_substep(
                 sticking_vertices: holds.sticking,
                 pressed_points: pn,
             },
+            contacts,
         ));
     }
     for &i in &s.held_list {
@@ -291,6 +301,8 @@ pub(super) struct Holds {
     pub sticking: usize,
     /// The vertices held at the end.
     pub vertices: Vec<u32>,
+    /// Each held vertex's position and the force it puts on the tool (surface frame).
+    pub contacts: Vec<(Vector, Vector)>,
 }
 
 /// Moves every surface vertex the tool contains out of it and holds it there (see [`Holds`]).
@@ -422,6 +434,7 @@ pub(super) fn hold_vertices(
         count: 0,
         sticking: 0,
         vertices: Vec::new(),
+        contacts: Vec::new(),
     };
     // A vertex moving over the tool slower than this (a millionth of the tool's size per
     // substep) is at rest on it.
@@ -472,6 +485,7 @@ pub(super) fn hold_vertices(
         out.moment += surface.position(i).cross(on_tool);
         out.count += 1;
         out.vertices.push(i);
+        out.contacts.push((surface.position(i), on_tool));
     }
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));

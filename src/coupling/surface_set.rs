@@ -3,7 +3,7 @@
 use super::events::{ToolTouchEvent, TouchTracker};
 use super::friction::{Friction, Sticks};
 use super::haptic_links::LinkState;
-use super::holding::{attached_with_pose, lerp_pose, surface_substep, ToolMotion};
+use super::holding::{attached_with_pose, lerp_pose, surface_substep, HeldContacts, ToolMotion};
 use super::pressing::Pressed;
 use super::search::ContactSearch;
 use super::tool_shape::ToolShape;
@@ -215,6 +215,9 @@ pub(super) struct ToolState {
     friction: Friction,
     /// Whether it grasps what it touches.
     pub(super) grasp: bool,
+    /// The vertices it held at the end of the last step: each one's position and force on
+    /// the tool (world), for the haptic model.
+    pub(super) held: HeldContacts,
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.

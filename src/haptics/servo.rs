@@ -123,6 +123,7 @@ impl<D: HapticDevice> Servo<D> {
         }
         let model = || ServoModel {
             patch: Vec::with_capacity(MAX_PATCH),
+            held: Vec::with_capacity(MAX_PATCH),
             ..ServoModel::default()
         };
         Ok(Servo {

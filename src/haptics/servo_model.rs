@@ -15,6 +15,26 @@ pub struct PatchVertex {
     pub stiffness: Real,
 }
 
+/// A surface vertex a smooth tool (a ball, a capsule, a rounded shape) held at the last world
+/// step, for the contact's turning normals between world steps (see [`ServoModel`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct HeldVertex {
+    /// Its position (world) at the last world step.
+    pub position: Vector,
+    /// The normal force it put on the tool there (N, at least 0).
+    pub load: Real,
+    /// The tool's outward normal at it then (unit, world).
+    pub normal: Vector,
+    /// Its share of the contact's normal stiffness (N/m): the load grows by this much per
+    /// metre its anchor lies deeper in the tool. 0: its load is kept as it turns.
+    pub stiffness: Real,
+    /// How deep behind the tool's surface its anchor lies (m, along `-normal`): where its
+    /// springs would take it without the tool (`load / stiffness`), but no deeper than a
+    /// quarter of the tool's smallest half extent (an anchor near the tool's middle would
+    /// change sides as the tool moves).
+    pub depth: Real,
+}
+
 /// What one tool's servo loop needs between two world steps: the full surface solution's force
 /// at the tool pose the world stepped to, the contact's stiffness around it, and, while the
 /// tool touches nothing, the surface vertices near it (for contacts that start between world
@@ -24,7 +44,16 @@ pub struct PatchVertex {
 /// - in contact (`force` not zero): `force - stiffness · (x - x₀)` for the tool's reference
 ///   point at `x` (`x₀` the pose the world stepped to), the linearisation of the surface's
 ///   force around the last full solution; the contact lets go (no force at all) where the
-///   part along `force` would turn into a pull, unless the tool grasps;
+///   part along `force` would turn into a pull, unless the tool grasps.
+/// - in contact, on a smooth tool (a ball, a capsule, a rounded shape: `held` not empty):
+///   each [`HeldVertex`] pushes along the tool's normal at the boundary point nearest its
+///   *anchor* (a point `depth` behind the surface at the world step, where its springs would
+///   take it without the tool), its load growing with its stiffness as the anchor lies
+///   deeper; the part of `stiffness` the held normals do not carry stays linear. A vertex held
+///   on a ball's side slides round it as the ball slides past, its force turning and easing
+///   off: a stiffness that is not positive and that no symmetric positive matrix holds (a
+///   capsule dragged over a coarse stiff plate: the linear model alone got the force's change
+///   at right angles to the true one);
 /// - out of contact: the deepest [`PatchVertex`] the tool's shape contains at `x` (turned as at
 ///   the world step) pushes the tool out with its stiffness times its depth. One point, not a
 ///   sum over the vertices inside: a membrane's stiffness under a tool does not grow with the
@@ -69,6 +98,8 @@ pub struct ServoModel {
     pub shape: Option<SharedShape>,
     /// Surface vertices near the tool, not in contact (empty while in contact).
     pub patch: Vec<PatchVertex>,
+    /// The surface vertices a smooth tool holds (empty for other tools, and out of contact).
+    pub held: Vec<HeldVertex>,
     /// `false` when the world side has let the tool go (removed, disconnected, or dropped):
     /// nothing is rendered.
     pub attached: bool,
@@ -85,6 +116,7 @@ impl Default for ServoModel {
             grasping: false,
             shape: None,
             patch: Vec::new(),
+            held: Vec::new(),
             attached: true,
         }
     }
@@ -110,46 +142,84 @@ impl ServoModel {
             return (Vector::ZERO, Matrix::ZERO);
         }
         if self.in_contact() {
-            let f = self.force - self.stiffness * (x - self.tool_pose.translation);
+            let (f, k) = match self.shape.as_deref() {
+                Some(shape) if !self.held.is_empty() => self.smooth_contact(shape, x),
+                _ => (
+                    self.force - self.stiffness * (x - self.tool_pose.translation),
+                    self.stiffness,
+                ),
+            };
             let along = self.force.normalize_or_zero();
-            if !f.is_finite() || (!self.grasping && f.dot(along) < 0.0) {
+            if !f.is_finite() || !k.is_finite() || (!self.grasping && f.dot(along) < 0.0) {
                 return (Vector::ZERO, Matrix::ZERO);
             }
-            return (f, self.stiffness);
+            return (f, k);
         }
         let Some(shape) = &self.shape else {
             return (Vector::ZERO, Matrix::ZERO);
         };
         let pose = Pose::from_parts(x, self.tool_pose.rotation);
-        // Vertices outside the shape's bounding sphere are skipped before the point query.
-        let sphere = shape.compute_local_bounding_sphere();
-        let (centre, r2) = (
-            pose.transform_point(sphere.center),
-            sphere.radius * sphere.radius,
-        );
-        // The deepest vertex inside the tool: (depth, direction out, stiffness).
-        let mut deepest: Option<(Real, Vector, Real)> = None;
-        for v in &self.patch {
-            if (v.position - centre).length_squared() > r2 {
-                continue;
+        match deepest_inside(shape.as_ref(), &pose, &self.patch) {
+            Some((n, depth, k)) if (n * (k * depth)).is_finite() => {
+                (n * (k * depth), outer(n, n) * k)
             }
-            let proj = shape.project_point(&pose, v.position, false);
-            if !proj.is_inside {
-                continue;
-            }
-            let out = v.position - proj.point;
-            let depth = out.length();
-            if depth > 0.0 && deepest.is_none_or(|d| depth > d.0) {
-                deepest = Some((depth, out / depth, v.stiffness));
-            }
-        }
-        match deepest {
-            Some((depth, n, k)) if (n * (k * depth)).is_finite() => (
-                n * (k * depth),
-                Matrix::from_cols(n * n.x, n * n.y, n * n.z) * k,
-            ),
             _ => (Vector::ZERO, Matrix::ZERO),
         }
+    }
+
+    /// How much the held vertices' normal forces change when their normals turn, the tool's
+    /// reference point at `x` instead of `x₀` (each load kept).
+    pub(crate) fn turning(&self, x: Vector) -> Vector {
+        let Some(shape) = self.shape.as_deref().filter(|_| !self.held.is_empty()) else {
+            return Vector::ZERO;
+        };
+        let pose = Pose::from_parts(x, self.tool_pose.rotation);
+        let mut df = Vector::ZERO;
+        for v in &self.held {
+            let n = normal_at(shape, &pose, v.position).unwrap_or(v.normal);
+            df += (v.normal - n) * v.load;
+        }
+        if df.is_finite() {
+            df
+        } else {
+            Vector::ZERO
+        }
+    }
+
+    /// A smooth tool's contact with its reference point at `x`: each held vertex pushes along
+    /// the tool's normal at the boundary point nearest its anchor, its load changed by its
+    /// stiffness times how much deeper the anchor lies than at the world step; the part of
+    /// `stiffness` the held vertices' normals do not carry (friction, the vertices' coupling)
+    /// stays linear. Force and the stiffness the proxy's steps go by (the linear one), as
+    /// [`ServoModel::force_and_stiffness_at`].
+    fn smooth_contact(&self, shape: &dyn parry3d::shape::Shape, x: Vector) -> (Vector, Matrix) {
+        let pose = Pose::from_parts(x, self.tool_pose.rotation);
+        let mut f = self.force;
+        let mut carried = Matrix::ZERO;
+        for v in &self.held {
+            let (n, load) = if v.stiffness > 0.0 {
+                carried += outer(v.normal, v.normal) * v.stiffness;
+                let anchor = v.position - v.normal * v.depth;
+                let proj = shape.project_point(&pose, anchor, false);
+                let d = proj.point - anchor;
+                let (depth, n) = match d.try_normalize() {
+                    Some(n) if proj.is_inside => (d.length(), n),
+                    Some(n) => (-d.length(), -n),
+                    None => (0.0, v.normal),
+                };
+                (n, (v.load + v.stiffness * (depth - v.depth)).max(0.0))
+            } else {
+                (
+                    normal_at(shape, &pose, v.position).unwrap_or(v.normal),
+                    v.load,
+                )
+            };
+            f += v.normal * v.load - n * load;
+        }
+        (
+            f - (self.stiffness - carried) * (x - self.tool_pose.translation),
+            self.stiffness,
+        )
     }
 
     /// [`ServoModel::force_and_stiffness_at`]'s force.
@@ -178,8 +248,86 @@ impl ServoModel {
         self.shape.clone_from(&other.shape);
         self.patch.clear();
         self.patch.extend_from_slice(&other.patch);
+        self.held.clear();
+        self.held.extend_from_slice(&other.held);
         self.attached = other.attached;
     }
+}
+
+/// The deepest of `patch`'s vertices inside `shape` at `pose`: the direction from the boundary
+/// point nearest it to it (the way it pushes the tool), its depth and its stiffness. Vertices
+/// outside the shape's bounding sphere are skipped before the point query.
+fn deepest_inside(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    patch: &[PatchVertex],
+) -> Option<(Vector, Real, Real)> {
+    let sphere = shape.compute_local_bounding_sphere();
+    let (centre, r2) = (
+        pose.transform_point(sphere.center),
+        sphere.radius * sphere.radius,
+    );
+    let mut deepest: Option<(Vector, Real, Real)> = None;
+    for v in patch {
+        if (v.position - centre).length_squared() > r2 {
+            continue;
+        }
+        let proj = shape.project_point(pose, v.position, false);
+        if !proj.is_inside {
+            continue;
+        }
+        let out = v.position - proj.point;
+        let depth = out.length();
+        if depth > 0.0 && deepest.is_none_or(|d| depth > d.1) {
+            deepest = Some((out / depth, depth, v.stiffness));
+        }
+    }
+    deepest
+}
+
+/// `a bᵀ`.
+fn outer(a: Vector, b: Vector) -> Matrix {
+    Matrix::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// The outward normal (world) of `shape` at `pose` at the boundary point nearest `p`: along
+/// `p`'s offset from that point, or, on the boundary, the shape's own normal there. `None`
+/// when not finite.
+pub(crate) fn normal_at(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+) -> Option<Vector> {
+    let proj = shape.project_point(pose, p, false);
+    let d = p - proj.point;
+    let size = shape.compute_local_aabb().half_extents().max_element();
+    let len = d.length();
+    let n = if len > 1e-5 * size {
+        if proj.is_inside {
+            -d / len
+        } else {
+            d / len
+        }
+    } else {
+        let local = pose.inverse_transform_point(proj.point);
+        pose.rotation * crate::coupling::boundary::outward_normal(shape, local, 0.0)
+    };
+    n.is_finite().then_some(n)
+}
+
+/// Whether `shape`'s normals turn smoothly over its whole boundary (a ball, a capsule, a
+/// rounded shape): no edge or rim where a held vertex's normal would jump.
+pub(crate) fn is_smooth(shape: &dyn parry3d::shape::Shape) -> bool {
+    use parry3d::shape::ShapeType;
+    matches!(
+        shape.shape_type(),
+        ShapeType::Ball
+            | ShapeType::Capsule
+            | ShapeType::RoundCuboid
+            | ShapeType::RoundCylinder
+            | ShapeType::RoundCone
+            | ShapeType::RoundConvexPolyhedron
+    )
 }
 
 /// [`ServoModel::proxy`] for any piecewise linear force `model(x) = (f, -∂f/∂x)`.

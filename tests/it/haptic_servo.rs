@@ -118,9 +118,11 @@ struct Case {
 #[test]
 fn the_servo_model_agrees_with_each_full_surface_update() {
     // The capsule is as wide as a mesh cell: dragged sideways, the one or two vertices it
-    // holds slide round its end, turning their normals within a world step, and the model
-    // gets that tangential force a step late (83 % of its updates within 5 % when measured;
-    // see the module docs of `haptics`).
+    // holds slide round its end, turning their normals within a world step. The linear model
+    // alone got that a step late (83 % of the updates within 5 %, and up to twice what
+    // holding the last solution would miss); the held vertices' anchors follow it (94 %: the
+    // misses left are updates where a vertex is captured or let go and the full solution
+    // itself jumps, `the_servo_model_agrees_where_the_full_solution_is_smooth...` below).
     let case = |size, cells, k, mass, substeps, shape, depth, least_share| Case {
         size,
         cells,
@@ -156,22 +158,16 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
             0.03,
             0.95,
         ),
-        // The capsule sinks while it slides: the force along the normal drops where the
-        // model's normal stiffness says it rises, and the model misses by up to twice what
-        // holding the last solution would (0.56 N against 0.28 N, measured).
-        Case {
-            hold_factor: 2.0,
-            ..case(
-                0.4,
-                20,
-                1000.0,
-                0.1,
-                2,
-                SharedShape::capsule_y(0.02, 0.02),
-                0.015,
-                0.8,
-            )
-        },
+        case(
+            0.4,
+            20,
+            1000.0,
+            0.1,
+            2,
+            SharedShape::capsule_y(0.02, 0.02),
+            0.015,
+            0.9,
+        ),
     ];
     for Case {
         size,
@@ -221,8 +217,13 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
             .copied()
             .max_by(|a, b| (a.0 - hold_factor * a.1).total_cmp(&(b.0 - hold_factor * b.1)))
             .unwrap();
+        let smooth_misses = run
+            .errors
+            .iter()
+            .filter(|(e, j)| *e > tolerance && *j <= tolerance)
+            .count();
         println!(
-            "{size} m plate, k {k}, {substeps} substeps: {within}/{} updates within 5 % of the {:.2} N peak, worst {:.3} N",
+            "{size} m plate, k {k}, {substeps} substeps: {within}/{} updates within 5 % of the {:.2} N peak, worst {:.3} N; {smooth_misses} misses where the full solution moved less than 5 %",
             run.errors.len(),
             run.peak,
             run.worst_error
@@ -237,6 +238,62 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
             "{size} m plate, k {k}: missed by {e} N where the full solution moved {jump} N"
         );
     }
+}
+
+/// Over coarse, stiff plates nobody tuned the model on (4, 5 and 6 cells across a 0.4 m plate,
+/// edges of 500 to 2000 N/m, a capsule and a ball pressed 12 to 18 mm in and dragged: 54
+/// runs, about 8,500 world updates), the full solution itself jumps by more than 5 % of the
+/// peak at about one update in five (a vertex captured or let go under a tool that holds one
+/// or two). Where it does not, the model is within 5 % of it at 95 % of the updates or more
+/// (98.6 % measured; the linear model alone, before the held vertices' anchors: 93.4 %), and
+/// at 88 % of all updates (90.9 %; 85.0 % before).
+#[test]
+fn the_servo_model_agrees_where_the_full_solution_is_smooth_on_coarse_stiff_plates() {
+    let (mut updates, mut within, mut smooth, mut smooth_within) = (0, 0, 0, 0);
+    let mut worst_run: (f32, String) = (1.0, String::new());
+    for cells in [16u32, 20, 24] {
+        for k in [500.0f32, 1000.0, 2000.0] {
+            for depth in [0.012f32, 0.015, 0.018] {
+                for shape in [SharedShape::capsule_y(0.02, 0.02), SharedShape::ball(0.025)] {
+                    let radius = shape.compute_local_aabb().half_extents().y;
+                    let scene = plate_scene(0.4, cells, k, 0.1, 2, shape);
+                    let k_max = VirtualCoupling::max_passive_stiffness(2000.0, 2.0);
+                    let coupling = VirtualCoupling {
+                        stiffness: 0.5 * k_max,
+                        damping: 0.0,
+                        max_force: 50.0,
+                    };
+                    let arm = press_drag_lift(depth, radius);
+                    let run = run_linked(scene, false, coupling, 2000.0, 4.0, arm);
+                    assert!(run.contacts > 60 && run.peak > 0.5);
+                    let tolerance = 0.05 * run.peak;
+                    let ok = run.errors.iter().filter(|(e, _)| *e <= tolerance).count();
+                    let calm: Vec<&(f32, f32)> =
+                        run.errors.iter().filter(|(_, j)| *j <= tolerance).collect();
+                    let calm_ok = calm.iter().filter(|(e, _)| *e <= tolerance).count();
+                    updates += run.errors.len();
+                    within += ok;
+                    smooth += calm.len();
+                    smooth_within += calm_ok;
+                    let share = calm_ok as f32 / calm.len() as f32;
+                    if share < worst_run.0 {
+                        worst_run = (
+                            share,
+                            format!("{cells} cells, k {k}, {depth} m, r {radius}"),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    let smooth_share = smooth_within as f32 / smooth as f32;
+    let share = within as f32 / updates as f32;
+    println!(
+        "{smooth_within}/{smooth} smooth updates within 5 % ({smooth_share:.3}), {within}/{updates} in all ({share:.3}); worst run {:.3} ({})",
+        worst_run.0, worst_run.1
+    );
+    assert!(smooth_share >= 0.95, "{smooth_share}");
+    assert!(share >= 0.88, "{share}");
 }
 
 #[test]
@@ -347,6 +404,69 @@ fn the_proxy_rests_where_the_coupling_and_the_model_balance() {
         ..model
     };
     assert_eq!(gone.force_at(Vector::new(0.0, -0.02, 0.0)), Vector::ZERO);
+}
+
+/// A ball of radius r holding one vertex at its bottom with load λ and stiffness s: the model
+/// is a spring of stiffness s from the vertex's anchor, λ/s above the vertex, to the ball's
+/// surface. Slid and pressed anywhere, the force is s (r - |a - c|) along (c - a) / |c - a|
+/// for the anchor a and the ball's centre c (written here from the sphere's geometry): it
+/// turns with the ball and pushes it on as it slides (the sign of a slide), and it is gone
+/// when the ball lifts off the anchor.
+#[test]
+fn a_vertex_held_on_a_ball_pushes_from_its_anchor_as_the_ball_slides_and_presses() {
+    use rapier_touch::haptics::HeldVertex;
+    let (r, load, s) = (0.05, 2.0, 400.0);
+    let normal = Vector::new(0.0, -1.0, 0.0);
+    let vertex = Vector::new(0.0, -r, 0.0);
+    let model = ServoModel {
+        sequence: 1,
+        force: Vector::new(0.0, load, 0.0),
+        // All of the contact's stiffness is the vertex's normal one.
+        stiffness: Matrix::from_cols(normal * normal.x, normal * normal.y, normal * normal.z) * s,
+        shape: Some(SharedShape::ball(r)),
+        held: vec![HeldVertex {
+            position: vertex,
+            load,
+            normal,
+            stiffness: s,
+            depth: load / s,
+        }],
+        ..ServoModel::default()
+    };
+    let anchor = vertex - normal * (load / s);
+    let mut pushed_on = 0;
+    for i in 0..40 {
+        let t = i as f32 / 39.0;
+        let c = Vector::new(
+            0.03 * (2.0 * t - 1.0),
+            -0.004 + 0.008 * ((7.0 * t).sin()),
+            0.01 * (3.0 * t).cos(),
+        );
+        let d = c - anchor;
+        let depth = r - d.length();
+        let expect = if depth > 0.0 {
+            d.normalize() * (s * depth)
+        } else {
+            Vector::ZERO
+        };
+        let f = model.force_at(c);
+        assert!(
+            (f - expect).length() <= 1e-4 * load,
+            "ball at {c}: {f} against {expect}"
+        );
+        if depth > 0.0 && c.x.abs() > 0.005 {
+            assert!(f.x * c.x > 0.0, "slid to {c}: {f}");
+            pushed_on += 1;
+        }
+    }
+    assert!(pushed_on > 10, "{pushed_on}");
+    // Lifted past the anchor: no force.
+    assert_eq!(
+        model.force_at(Vector::new(0.0, load / s + 1e-3, 0.0)),
+        Vector::ZERO
+    );
+    // At the pose the world stepped to: the world's force.
+    assert!((model.force_at(Vector::ZERO) - model.force).length() < 1e-5);
 }
 
 #[test]

@@ -47,10 +47,12 @@ impl SurfaceSet {
             }))
             .collect();
         let mut total = ToolReaction::default();
+        let mut held = Vec::new();
         for (_, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let h = s.surface.dt();
-            for (th, r) in surface_substep(s, world, &body_pose, &others, h) {
+            for (th, r, contacts) in surface_substep(s, world, &body_pose, &others, h) {
                 if th == tool {
+                    held.extend(contacts);
                     total.force += r.force;
                     total.torque += r.torque;
                     total.mean_force += r.force;
@@ -62,6 +64,7 @@ impl SurfaceSet {
         }
         if let Some(state) = self.tools.get_mut(&tool) {
             state.reaction = total;
+            state.held = held;
         }
         Some(total)
     }
@@ -101,6 +104,7 @@ impl SurfaceSet {
         let dt = world.integration_parameters.dt;
         for t in self.tools.values_mut() {
             t.reaction = ToolReaction::default();
+            t.held.clear();
         }
         let tool_list: Vec<ToolMotion> = self
             .tools
@@ -137,7 +141,7 @@ impl SurfaceSet {
                         grasp: t.grasp,
                     })
                     .collect();
-                for (th, r) in surface_substep(s, world, &body_pose, &poses, h) {
+                for (th, r, contacts) in surface_substep(s, world, &body_pose, &poses, h) {
                     let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
                     m.0 += r.force / n as Real;
                     m.1 += r.torque / n as Real;
@@ -146,6 +150,7 @@ impl SurfaceSet {
                             touching.insert((th, handle));
                         }
                         if let Some(t) = self.tools.get_mut(&th) {
+                            t.held.extend(contacts);
                             t.reaction.force += r.force;
                             t.reaction.torque += r.torque;
                             t.reaction.held_vertices += r.held_vertices;

@@ -55,6 +55,7 @@ impl SurfaceSet {
                 shape,
                 friction: Friction::NONE,
                 grasp: false,
+                held: Vec::new(),
             },
         );
         Ok(())
