@@ -47,6 +47,8 @@ pub(super) struct ToolMotion {
     pub friction: Friction,
     /// Whether the tool grasps what it touches (bilateral contacts).
     pub grasp: bool,
+    /// Whether to hand back the vertices it holds with their forces (for a haptic link).
+    pub record: bool,
 }
 
 /// Vertices a tool holds: each one's position and the force it puts on the tool (world).
@@ -126,7 +128,7 @@ pub(super) fn surface_substep(
             .near(k, t.handle, &parts.map_or(near, |p| p.merged(&near)));
         merge_sorted(&mut s.search.vertices, &s.held_list);
         let holds = hold_vertices(
-            (t.handle, friction, t.grasp, &mut s.sticks),
+            (t.handle, friction, t.grasp, t.record, &mut s.sticks),
             follow,
             &mut s.surface,
             shape,
@@ -301,7 +303,8 @@ pub(super) struct Holds {
     pub sticking: usize,
     /// The vertices held at the end.
     pub vertices: Vec<u32>,
-    /// Each held vertex's position and the force it puts on the tool (surface frame).
+    /// Each held vertex's position and the force it puts on the tool (surface frame), when
+    /// asked to record them.
     pub contacts: Vec<(Vector, Vector)>,
 }
 
@@ -317,7 +320,7 @@ pub(super) struct Holds {
 /// tool keeps every vertex it touches stuck, pulled or pushed, until it lets go.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hold_vertices(
-    (tool, friction, grasp, sticks): (ColliderHandle, Friction, bool, &mut Sticks),
+    (tool, friction, grasp, record, sticks): (ColliderHandle, Friction, bool, bool, &mut Sticks),
     follow: bool,
     surface: &mut MassSpringSurface,
     shape: &dyn parry3d::shape::Shape,
@@ -485,7 +488,9 @@ pub(super) fn hold_vertices(
         out.moment += surface.position(i).cross(on_tool);
         out.count += 1;
         out.vertices.push(i);
-        out.contacts.push((surface.position(i), on_tool));
+        if record {
+            out.contacts.push((surface.position(i), on_tool));
+        }
     }
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));

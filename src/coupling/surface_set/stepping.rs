@@ -35,6 +35,7 @@ impl SurfaceSet {
                     shape: t.shape.clone(),
                     friction: t.friction,
                     grasp: t.grasp,
+                    record: false,
                 })
             })
             .chain(std::iter::once(ToolMotion {
@@ -44,6 +45,7 @@ impl SurfaceSet {
                 shape,
                 friction,
                 grasp,
+                record: false,
             }))
             .collect();
         let mut total = ToolReaction::default();
@@ -119,6 +121,7 @@ impl SurfaceSet {
                     shape: t.shape.clone(),
                     friction: t.friction,
                     grasp: t.grasp,
+                    record: self.links.contains_key(h),
                 })
             })
             .collect();
@@ -139,6 +142,7 @@ impl SurfaceSet {
                         shape: t.shape.clone(),
                         friction: t.friction,
                         grasp: t.grasp,
+                        record: t.record,
                     })
                     .collect();
                 for (th, r, contacts) in surface_substep(s, world, &body_pose, &poses, h) {
