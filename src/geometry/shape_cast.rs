@@ -92,6 +92,10 @@ impl Reconstructor {
         // toward `fixed` (per unit of `t`).
         let reach = (sphere.radius + (sphere.center - motion.local_center).length()) as f64;
         let speed = motion.max_travel(reach) as Real;
+        // The centre's displacement over the step and the arc a point `reach` from it turns
+        // through (per unit of `t`), for the advance's bound along the separating direction.
+        let (c0, c1) = motion.centres();
+        let drift = ((c1 - c0).as_vec3(), (motion.dangle() * reach) as Real);
         let end = motion.end;
         let d = end.translation - motion.start.translation;
         let (direction, direction_source) = match d.try_normalize() {
@@ -99,7 +103,7 @@ impl Reconstructor {
             _ => (Vector::ZERO, DirectionSource::ZeroMotionFallback),
         };
         let mut result = ContactConfiguration::separated(direction, direction_source, false, end);
-        let first = q.advance(|t| motion.pose_at(t), speed, 1.0);
+        let first = q.advance(|t| motion.pose_at(t), speed, Some(drift), 1.0);
         match first {
             Advance::Unsupported => Ok(None),
             Advance::Apart => {
@@ -144,7 +148,12 @@ impl Reconstructor {
                     // Not overlapping now: a graze, unless the shape passed through. Advancing
                     // back from the pose now finds the last touch on the path; later than the
                     // first one by more than the touch tolerance, the shape went in and out.
-                    let back = q.advance(|s| motion.pose_at(1.0 - s), speed, 1.0 - t);
+                    let back = q.advance(
+                        |s| motion.pose_at(1.0 - s),
+                        speed,
+                        Some((-drift.0, drift.1)),
+                        1.0 - t,
+                    );
                     match back {
                         Advance::Touch(s) if ((1.0 - s) - t) * speed > 2.0 * q.touch => {
                             TouchState::Perforated
@@ -196,6 +205,12 @@ impl SupportMap for Scaled<'_> {
     fn local_support_point(&self, dir: Vector) -> Vector {
         self.shape.local_support_point(dir) * self.k
     }
+}
+
+/// [`PairQuery::separation`]'s answer.
+struct Separation {
+    distance: Real,
+    along: Option<(Vector, Real)>,
 }
 
 /// parry's distance and contact queries for one pair, the fixed shape at a fixed pose.
@@ -285,6 +300,42 @@ impl<'a> PairQuery<'a> {
         d.is_finite().then_some(d)
     }
 
+    /// For two support-map shapes: GJK's distance at `pose` (as [`PairQuery::distance`]) and,
+    /// apart, the unit direction (world) from `fixed`'s closest point to `moving`'s and how
+    /// far apart the two are along it, exactly, from one support point of each (GJK's distance
+    /// is an upper bound; this one bounds the true distance from below). `None` for other
+    /// pairs, or where GJK does not converge.
+    fn separation(&self, pose: &Pose) -> Option<Separation> {
+        let (f, m) = self.convex.as_ref().filter(|_| self.sized)?;
+        let pos12 = self.scaled_pose(pose);
+        let dir = (-pos12.translation).try_normalize().unwrap_or(Vector::X);
+        let mut simplex = query::gjk::VoronoiSimplex::new();
+        simplex.reset(query::gjk::CsoPoint::from_shapes(&pos12, f, m, dir));
+        let (p1, p2) = match query::gjk::closest_points(&pos12, f, m, Real::MAX, true, &mut simplex)
+        {
+            query::gjk::GJKResult::ClosestPoints(p1, p2, _) => (p1, p2),
+            query::gjk::GJKResult::Intersection => {
+                return Some(Separation {
+                    distance: 0.0,
+                    along: None,
+                })
+            }
+            _ => return None,
+        };
+        let distance = (p2 - p1).length() * self.unit;
+        if !distance.is_finite() {
+            return None;
+        }
+        let along = (p2 - p1).try_normalize().and_then(|n| {
+            let top = f.local_support_point_toward(n).dot(n);
+            let bottom = m.support_point_toward(&pos12, -n).dot(n);
+            let gap = (bottom - top) * self.unit;
+            let n = self.pos_fixed.rotation * n;
+            (gap.is_finite() && n.is_finite()).then_some((n, gap))
+        });
+        Some(Separation { distance, along })
+    }
+
     /// The contact with `moving` at `pose` (in world space), if closer than twice the touch
     /// tolerance.
     fn contact(&self, pose: &Pose) -> Option<query::Contact> {
@@ -320,11 +371,23 @@ impl<'a> PairQuery<'a> {
     /// however the shape turns. (parry's own nonlinear shape cast, which bisects along one
     /// separating axis, answered a first touch at `t = 1e-6` for a spinning rounded hull still
     /// 38 mm from the floor, which froze the hull in place step after step.)
-    fn advance(&self, pose_at: impl Fn(Real) -> Pose, speed: Real, until: Real) -> Advance {
+    fn advance(
+        &self,
+        pose_at: impl Fn(Real) -> Pose,
+        speed: Real,
+        drift: Option<(Vector, Real)>,
+        until: Real,
+    ) -> Advance {
         let mut t: Real = 0.0;
         let mut apart: Real = 0.0;
         for _ in 0..MAX_ADVANCES {
-            let Some(d) = self.distance(&pose_at(t)) else {
+            let pose = pose_at(t);
+            let sep = drift.and_then(|_| self.separation(&pose));
+            let Some(d) = sep
+                .as_ref()
+                .map(|s| s.distance)
+                .or_else(|| self.distance(&pose))
+            else {
                 return Advance::Unsupported;
             };
             if t == 0.0 && d <= self.touch {
@@ -358,7 +421,23 @@ impl<'a> PairQuery<'a> {
             apart = t;
             // Stop inside the touch band, not at its edge. GJK's distance is an upper bound
             // that stops within `GJK_REL` of itself: advance by what surely separates.
-            t += (d * (1.0 - GJK_REL) - 0.5 * self.touch) / speed;
+            let mut step = (d * (1.0 - GJK_REL) - 0.5 * self.touch) / speed;
+            // Two convex shapes are at least `gap` apart along `n`, and that gap shrinks no
+            // faster than the centre closes along `n` plus the arc any point turns through:
+            // a body sliding past (a rolling cone, a box skidding on the floor) closes slowly
+            // along `n` however fast it goes, and advances in a few steps where its whole
+            // speed took dozens (the query cost most of the guard on rapier's CCD scene).
+            if let (Some((v, arc)), Some((n, gap))) = (drift, sep.and_then(|s| s.along)) {
+                let closing = (-v.dot(n)).max(0.0) + arc;
+                let safe = gap.min(d * (1.0 - GJK_REL)) - 0.5 * self.touch;
+                if closing <= 0.0 && safe > 0.0 {
+                    return Advance::Apart;
+                }
+                if closing > 0.0 {
+                    step = step.max(safe / closing);
+                }
+            }
+            t += step;
             if t > until {
                 return Advance::Apart;
             }
@@ -451,7 +530,7 @@ impl Reconstructor {
                     pos_moving.rotation,
                 )
             };
-            let s = match q.advance(pose_at, reach, 1.0) {
+            let s = match q.advance(pose_at, reach, None, 1.0) {
                 Advance::Unsupported => return Ok(None),
                 Advance::InContact => continue,
                 Advance::Apart => return Ok(Some(result)),
