@@ -15,7 +15,7 @@ use parry3d::query::Ray;
 /// the point and returns the exact normal there (parry's feature normals at a boundary point
 /// are unreliable for cylinders and cones, and missing for capsules and round shapes).
 /// Fallbacks: the feature normal, then the direction from the shape's centre.
-pub(crate) fn outward_normal(
+pub(super) fn outward_normal(
     shape: &dyn parry3d::shape::Shape,
     local: Vector,
     margin: Real,

@@ -2,6 +2,7 @@
 //! servo loop's proxy before the rigid step, and after the surfaces' step the set publishes the
 //! tool's local contact model.
 
+use super::boundary::outward_normal;
 use super::holding::attached_with_pose;
 use super::surface_set::AttachedSurface;
 use super::surface_set::{CouplingError, SurfaceSet};
@@ -266,7 +267,12 @@ fn held_vertices(
     let mut out: Vec<HeldVertex> = held
         .iter()
         .filter_map(|&(position, f)| {
-            let normal = normal_at(shape, pose, position)?;
+            // A held vertex lies on the tool's boundary: its normal is the shape's there.
+            let normal = normal_at(shape, pose, position).or_else(|| {
+                let local = pose.inverse_transform_point(position);
+                let n = pose.rotation * outward_normal(shape, local, 0.0);
+                n.is_finite().then_some(n)
+            })?;
             let load = -f.dot(normal);
             (load > 0.0 && load.is_finite()).then_some(HeldVertex {
                 position,

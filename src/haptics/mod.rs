@@ -44,7 +44,7 @@
 //!   whose change of force came out at right angles to the true one) to 94 %. The misses
 //!   left are updates where the full solution itself jumps by more than 5 % (a vertex
 //!   captured or let go): over 54 coarse stiff plates and tools nobody tuned, about one
-//!   update in five, and at the others the model is within 5 % at 98.6 % of them (93.4 %
+//!   update in five, and at the others the model is within 5 % at 98.8 % of them (93.4 %
 //!   with the secant alone). Scaling the secant by how well it predicted the last update
 //!   raised the capsule to 87 % but gave a stiff press back 2.1 % more energy per cycle than
 //!   the hand put in (0.8 % without): not kept. Adding a vertex the tool comes to cover

@@ -290,9 +290,9 @@ fn outer(a: Vector, b: Vector) -> Matrix {
     Matrix::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
-/// The outward normal (world) of `shape` at `pose` at the boundary point nearest `p`: along
-/// `p`'s offset from that point, or, on the boundary, the shape's own normal there. `None`
-/// when not finite.
+/// The outward normal (world) of `shape` at `pose` at the boundary point nearest `p`, along
+/// `p`'s offset from that point. `None` when `p` lies on the boundary (within 1e-5 of the
+/// shape's size: the offset gives no direction there) or the answer is not finite.
 pub(crate) fn normal_at(
     shape: &dyn parry3d::shape::Shape,
     pose: &Pose,
@@ -302,17 +302,8 @@ pub(crate) fn normal_at(
     let d = p - proj.point;
     let size = shape.compute_local_aabb().half_extents().max_element();
     let len = d.length();
-    let n = if len > 1e-5 * size {
-        if proj.is_inside {
-            -d / len
-        } else {
-            d / len
-        }
-    } else {
-        let local = pose.inverse_transform_point(proj.point);
-        pose.rotation * crate::coupling::boundary::outward_normal(shape, local, 0.0)
-    };
-    n.is_finite().then_some(n)
+    let n = if proj.is_inside { -d / len } else { d / len };
+    (len > 1e-5 * size && n.is_finite()).then_some(n)
 }
 
 /// Whether `shape`'s normals turn smoothly over its whole boundary (a ball, a capsule, a
