@@ -140,6 +140,11 @@ impl SurfaceSet {
                     let r = &t.reaction;
                     (r.force, t.grasp, r.held_vertices + r.pressed_points)
                 });
+            let force = if force.is_finite() {
+                force
+            } else {
+                Vector::ZERO
+            };
             let Some(state) = self.links.get(&h) else {
                 continue;
             };
@@ -256,8 +261,7 @@ const MAX_ANCHORED: usize = 4;
 /// tool), as the servo model reads them: the tool's normal at each, its normal load, its
 /// share of the contact's normal stiffness (by load, from `stiffness` along its normal) and
 /// its anchor's depth. A vertex whose anchor would not come back to it at `pose` (deeper than
-/// the tool is round there) keeps its load and only turns. Most [`MAX_PATCH`], the most
-/// loaded.
+/// the tool is round there) keeps its load and only turns.
 fn held_vertices(
     held: &[(Vector, Vector)],
     shape: &dyn parry3d::shape::Shape,
@@ -283,10 +287,6 @@ fn held_vertices(
             })
         })
         .collect();
-    if out.len() > MAX_PATCH {
-        out.select_nth_unstable_by(MAX_PATCH, |a, b| b.load.total_cmp(&a.load));
-        out.truncate(MAX_PATCH);
-    }
     let total: Real = out.iter().map(|v| v.load).sum();
     let half = shape.compute_local_aabb().half_extents();
     let deepest = 0.25 * half.min_element();
