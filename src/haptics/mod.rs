@@ -41,11 +41,11 @@
 //!   positive stiffness holds. On the six plates of `tests/it/haptic_servo.rs` the model
 //!   predicts the next update within 5 % of the peak at 94-100 % of the updates; a capsule as
 //!   wide as a mesh cell dragged over a stiff coarse plate went from 83 % (the secant alone,
-//!   whose change of force came out at right angles to the true one) to 94 %. The misses
-//!   left are updates where the full solution itself jumps by more than 5 % (a vertex
-//!   captured or let go): over 54 coarse stiff plates and tools nobody tuned, about one
-//!   update in five, and at the others the model is within 5 % at 98.8 % of them (93.4 %
-//!   with the secant alone). Scaling the secant by how well it predicted the last update
+//!   whose change of force came out at right angles to the true one) to 94 %, its misses
+//!   left all updates where the full solution itself jumps by more than 5 % (a vertex
+//!   captured or let go). Over 54 coarse stiff plates and tools nobody tuned, the full
+//!   solution jumps so at about one update in five, and at the others the model is within
+//!   5 % at 98.8 % of them (93.4 % with the secant alone). Scaling the secant by how well it predicted the last update
 //!   raised the capsule to 87 % but gave a stiff press back 2.1 % more energy per cycle than
 //!   the hand put in (0.8 % without): not kept. Adding a vertex the tool comes to cover
 //!   between updates (as a first touch does) read better on that capsule (96 %) but worse
