@@ -7,7 +7,8 @@ use super::holding::attached_with_pose;
 use super::surface_set::AttachedSurface;
 use super::surface_set::{CouplingError, SurfaceSet};
 use crate::haptics::{
-    is_smooth, normal_at, positive_part, HeldVertex, PatchVertex, ServoModel, WorldLink, MAX_PATCH,
+    is_smooth, normal_at, outer, positive_part, HeldVertex, PatchVertex, ServoModel, WorldLink,
+    MAX_PATCH,
 };
 use crate::math::{Matrix, Pose, Real, Vector};
 use parry3d::bounding_volume::Aabb;
@@ -304,11 +305,6 @@ fn held_vertices(
         }
     }
     out
-}
-
-/// `a bᵀ`.
-fn outer(a: Vector, b: Vector) -> Matrix {
-    Matrix::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
 /// The largest first-touch stiffness of the surface vertices on or in the tool at `pose` (those

@@ -45,7 +45,7 @@
 //!   left all updates where the full solution itself jumps by more than 5 % (a vertex
 //!   captured or let go). Over 54 coarse stiff plates and tools nobody tuned, the full
 //!   solution jumps so at about one update in five, and at the others the model is within
-//!   5 % at 98.8 % of them (93.4 % with the secant alone). Scaling the secant by how well it predicted the last update
+//!   5 % at 98.7 % of them (93.4 % with the secant alone). Scaling the secant by how well it predicted the last update
 //!   raised the capsule to 87 % but gave a stiff press back 2.1 % more energy per cycle than
 //!   the hand put in (0.8 % without): not kept. Adding a vertex the tool comes to cover
 //!   between updates (as a first touch does) read better on that capsule (96 %) but worse
@@ -85,7 +85,7 @@ pub use hand::SimulatedHand;
 pub use link::{haptic_link, DeviceSample, ServoLink, WorldLink};
 pub use recording::{Recording, RecordingError};
 pub use servo::{Servo, ServoReport, ServoThread, ServoTick, TickRecord};
-pub(crate) use servo_model::{is_smooth, normal_at, positive_part, MAX_PATCH};
+pub(crate) use servo_model::{is_smooth, normal_at, outer, positive_part, MAX_PATCH};
 pub use servo_model::{HeldVertex, PatchVertex, ServoModel};
 pub use virtual_coupling::VirtualCoupling;
 

@@ -200,13 +200,7 @@ impl ServoModel {
             let (n, load) = if v.stiffness > 0.0 {
                 carried += outer(v.normal, v.normal) * v.stiffness;
                 let anchor = v.position - v.normal * v.depth;
-                let proj = shape.project_point(&pose, anchor, false);
-                let d = proj.point - anchor;
-                let (depth, n) = match d.try_normalize() {
-                    Some(n) if proj.is_inside => (d.length(), n),
-                    Some(n) => (-d.length(), -n),
-                    None => (0.0, v.normal),
-                };
+                let (depth, n) = boundary_offset(shape, &pose, anchor).unwrap_or((0.0, v.normal));
                 (n, (v.load + v.stiffness * (depth - v.depth)).max(0.0))
             } else {
                 (
@@ -272,22 +266,35 @@ fn deepest_inside(
         if (v.position - centre).length_squared() > r2 {
             continue;
         }
-        let proj = shape.project_point(pose, v.position, false);
-        if !proj.is_inside {
-            continue;
-        }
-        let out = v.position - proj.point;
-        let depth = out.length();
-        if depth > 0.0 && deepest.is_none_or(|d| depth > d.1) {
-            deepest = Some((out / depth, depth, v.stiffness));
+        if let Some((depth, n)) = boundary_offset(shape, pose, v.position) {
+            if depth > 0.0 && deepest.is_none_or(|d| depth > d.1) {
+                deepest = Some((-n, depth, v.stiffness));
+            }
         }
     }
     deepest
 }
 
 /// `a bᵀ`.
-fn outer(a: Vector, b: Vector) -> Matrix {
+pub(crate) fn outer(a: Vector, b: Vector) -> Matrix {
     Matrix::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// Where `p` lies from the boundary of `shape` at `pose`: how deep inside (negative: how far
+/// outside) and the outward normal at the boundary point nearest it (along `p`'s offset from
+/// that point). `None` on the boundary itself (the offset gives no direction) or when not
+/// finite.
+fn boundary_offset(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+) -> Option<(Real, Vector)> {
+    let proj = shape.project_point(pose, p, false);
+    let d = proj.point - p;
+    let len = d.length();
+    let n = d.try_normalize()?;
+    let (depth, n) = if proj.is_inside { (len, n) } else { (-len, -n) };
+    (len > 0.0 && n.is_finite()).then_some((depth, n))
 }
 
 /// The outward normal (world) of `shape` at `pose` at the boundary point nearest `p`, along
@@ -298,12 +305,10 @@ pub(crate) fn normal_at(
     pose: &Pose,
     p: Vector,
 ) -> Option<Vector> {
-    let proj = shape.project_point(pose, p, false);
-    let d = p - proj.point;
     let size = shape.compute_local_aabb().half_extents().max_element();
-    let len = d.length();
-    let n = if proj.is_inside { -d / len } else { d / len };
-    (len > 1e-5 * size && n.is_finite()).then_some(n)
+    boundary_offset(shape, pose, p)
+        .filter(|(depth, _)| depth.abs() > 1e-5 * size)
+        .map(|(_, n)| n)
 }
 
 /// Whether `shape`'s normals turn smoothly over its whole boundary (a ball, a capsule, a

@@ -245,8 +245,8 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
 /// runs, about 8,500 world updates), the full solution itself jumps by more than 5 % of the
 /// peak at about one update in five (a vertex captured or let go under a tool that holds one
 /// or two). Where it does not, the model is within 5 % of it at 95 % of the updates or more
-/// (98.8 % measured; the linear model alone, before the held vertices' anchors: 93.4 %), and
-/// at 88 % of all updates (90.6 %; 85.0 % before).
+/// (98.7 % measured; the linear model alone, before the held vertices' anchors: 93.4 %), and
+/// at 88 % of all updates (90.7 %; 85.0 % before).
 #[test]
 fn the_servo_model_agrees_where_the_full_solution_is_smooth_on_coarse_stiff_plates() {
     let (mut updates, mut within, mut smooth, mut smooth_within) = (0, 0, 0, 0);
