@@ -467,6 +467,11 @@ fn a_vertex_held_on_a_ball_pushes_from_its_anchor_as_the_ball_slides_and_presses
     );
     // At the pose the world stepped to: the world's force.
     assert!((model.force_at(Vector::ZERO) - model.force).length() < 1e-5);
+    // A device reading NaN gets nothing; a held vertex with a NaN position hands no NaN on.
+    assert_eq!(model.force_at(Vector::NAN), Vector::ZERO);
+    let mut broken = model.clone();
+    broken.held[0].position = Vector::NAN;
+    assert!(broken.force_at(Vector::new(0.01, 0.0, 0.0)).is_finite());
 }
 
 #[test]
