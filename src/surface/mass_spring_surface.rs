@@ -11,6 +11,7 @@ use std::collections::HashMap;
 
 mod active_set;
 mod baraff_witkin;
+mod blocks;
 mod builder;
 mod changes;
 mod constraints;

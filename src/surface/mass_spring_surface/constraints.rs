@@ -5,9 +5,10 @@
 //! surface responds to them as to moving pins.
 
 use super::active_set::{give_back, solve_pushing, zeroed, Scratch};
+use super::blocks::independent_blocks;
 use super::{motion_watch, MassSpringSurface, SurfaceError, NOT_FREE};
 use crate::math::{Real, Vector};
-use crate::surface::filter::Filter;
+use crate::surface::filter::{Filter, FilterKind};
 use glamx::DVec3;
 use parry3d::utils::hashset::HashSet;
 
@@ -451,14 +452,24 @@ pub(super) fn constrain(
         filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
     }
     let m = cons.len();
-    let mut a_mat = zeroed(&mut memory.scratch.system, m, m);
-    let mut rhs = nalgebra::DVector::<f64>::zeros(m);
     // P's column k (column-major storage): P[(j, k)] = p_col[k * h + j] = P[(k, j)].
     let p_col = p_hh.as_slice();
-    for (a, (da, ea, na, point)) in cons.iter().enumerate() {
-        // Vertex holds: no change of the held velocity. Point holds: at least their least
-        // velocity.
-        rhs[a] = match point {
+    // Entry (a, b) of A = J P Jᵀ.
+    let a_entry = |(da, ea, na, _): &Con, (db, eb, nb, _): &Con| {
+        let mut s = 0.0;
+        for &(ka, wa) in &ea[..*na] {
+            let column = &p_col[ka * h..ka * h + h];
+            for &(kb, wb) in &eb[..*nb] {
+                s += wa * wb * column[kb];
+            }
+        }
+        da.dot(*db) * s
+    };
+    // Vertex holds: no change of the held velocity. Point holds: at least their least
+    // velocity.
+    let rhs: Vec<f64> = cons
+        .iter()
+        .map(|(da, ea, na, point)| match point {
             None => -ea[..*na]
                 .iter()
                 .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
@@ -473,50 +484,67 @@ pub(super) fn constrain(
                         })
                         .sum::<f64>()
             }
-        };
-        // A is symmetric (P is): the upper triangle is computed and mirrored.
-        for (b, (db, eb, nb, _)) in cons.iter().enumerate().skip(a) {
-            let dd = da.dot(*db);
-            let mut s = 0.0;
-            for &(ka, wa) in &ea[..*na] {
-                let column = &p_col[ka * h..ka * h + h];
-                for &(kb, wb) in &eb[..*nb] {
-                    s += wa * wb * column[kb];
-                }
-            }
-            a_mat[(a, b)] = dd * s;
-            a_mat[(b, a)] = dd * s;
-        }
-    }
+        })
+        .collect();
     // A point hold on a held vertex, or two on the same points, repeat a constraint: a tiny
     // diagonal term keeps the system definite (the least-norm impulses).
-    let scale = (0..m).map(|a| a_mat[(a, a)]).fold(0.0, f64::max);
-    for a in 0..m {
-        a_mat[(a, a)] += 1e-12 * scale;
-    }
+    let scale = cons.iter().map(|c| a_entry(c, c)).fold(0.0, f64::max);
     // Point holds only push (one that would pull is let go) and a point left out must not pass
     // its holder; vertex holds are bilateral.
-    let tol = 1e-9 * (1.0 + rhs.amax());
+    let tol = 1e-9 * (1.0 + rhs.iter().fold(0.0, |a: f64, r| a.max(r.abs())));
     let keys: Vec<Option<[u32; 3]>> = cons
         .iter()
         .map(|c| c.3.map(|pi| points[pi].key()))
         .collect();
-    give_back(&mut memory.scratch.block, p_hh);
-    let mut factor = std::mem::take(&mut memory.scratch.factor);
-    let starts_in = |c: usize| keys[c].is_none_or(|k| memory.starts_in(k, rhs[c]));
-    let solved = solve_pushing(
-        &a_mat,
-        &rhs,
-        |c| cons[c].3.is_some(),
-        starts_in,
-        tol,
-        &mut factor,
+    let starts_in: Vec<bool> = (0..m)
+        .map(|c| keys[c].is_none_or(|k| memory.starts_in(k, rhs[c])))
+        .collect();
+    // The neighbour filter reaches a few rings of vertices: tools pressing apart give
+    // independent blocks of A, each solved on its own (six cubes on the 784-node plate: six
+    // solves of about 18 rows instead of one of about 110). The exact filter connects every
+    // pair: one block.
+    let local = matches!(filter.kind(), FilterKind::Neighbour { .. });
+    let blocks = independent_blocks(
+        h,
+        local.then_some(p_col),
+        cons.iter()
+            .map(|(_, e, n, _)| e[..*n].iter().map(|&(k, _)| k)),
     );
+    let mut lambda = vec![0.0; m];
+    let mut active = vec![false; m];
+    let mut factor = std::mem::take(&mut memory.scratch.factor);
+    for block in &blocks {
+        let mb = block.len();
+        // A is symmetric (P is): the upper triangle is computed and mirrored.
+        let mut a_mat = zeroed(&mut memory.scratch.system, mb, mb);
+        for (i, &ca) in block.iter().enumerate() {
+            for (j, &cb) in block.iter().enumerate().skip(i) {
+                let v = a_entry(&cons[ca], &cons[cb]);
+                a_mat[(i, j)] = v;
+                a_mat[(j, i)] = v;
+            }
+            a_mat[(i, i)] += 1e-12 * scale;
+        }
+        let b = nalgebra::DVector::from_fn(mb, |i, _| rhs[block[i]]);
+        let solved = solve_pushing(
+            &a_mat,
+            &b,
+            |i| cons[block[i]].3.is_some(),
+            |i| starts_in[block[i]],
+            tol,
+            &mut factor,
+        );
+        give_back(&mut memory.scratch.system, a_mat);
+        // A block whose solve fails (not finite) gives no impulses; the others stand.
+        if let Some((x, act)) = solved {
+            for (i, &c) in block.iter().enumerate() {
+                lambda[c] = x[i];
+                active[c] = act[i];
+            }
+        }
+    }
     memory.scratch.factor = factor;
-    give_back(&mut memory.scratch.system, a_mat);
-    let Some((lambda, active)) = solved else {
-        return;
-    };
+    give_back(&mut memory.scratch.block, p_hh);
     memory.seen.clear();
     memory.pushing.clear();
     for (c, key) in keys.iter().enumerate() {
