@@ -109,7 +109,7 @@ pub mod prelude {
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use crate::surface::{
         FilterKind, ForceProfile, Integrator, MassDistribution, MassSpringSurface,
-        MassSpringSurfaceBuilder, SpringModel, SurfaceError,
+        MassSpringSurfaceBuilder, PointPress, SpringModel, SurfaceError, Tangential,
     };
     // The shapes below are the very items `rapier3d::prelude` exports under the same names
     // (rapier's `Cuboid` is its own alias of parry's), so both preludes glob-import together.

@@ -1,6 +1,8 @@
 //! Coulomb friction between a tool and a surface at the vertices the tool holds: a held vertex
 //! sticks to the tool's material point while the tangential part of its spring and damper
 //! force is within the static limit, and slips, pulled back by kinetic friction, beyond it.
+//! At the points a tool presses between vertices, the same law is solved by the surface with
+//! the step's constraints ([`crate::surface::Tangential::Coulomb`], `super::pressing`).
 
 use super::surface_set::CouplingError;
 use crate::math::{Real, Vector};

@@ -5,7 +5,10 @@
 
 use super::boundary::{distance_outside, exit_along, nearest_on_boundary, outward_normal};
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
-use super::pressing::{find_contacts, part_query, press_all, reaction_of, record_impulses};
+use super::pressing::{
+    add_grasped, find_contacts, part_query, press_all, reaction_of, record_grasped,
+    record_impulses, Grasper, PressOwner,
+};
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::{contact_margin, ToolShape};
 use crate::math::{Pose, Real, Vector};
@@ -185,6 +188,11 @@ pub(super) fn surface_substep(
         s.contacts.clear();
         let (mut velocities, mut owners, mut kept) = (Vec::new(), Vec::new(), Vec::new());
         for (k, t) in tools.iter().enumerate() {
+            let friction = s
+                .pair_friction
+                .get(&t.handle)
+                .copied()
+                .unwrap_or(t.friction);
             for (local, mesh) in &t.shape.parts {
                 find_contacts(
                     s.surface.triangles(),
@@ -198,15 +206,43 @@ pub(super) fn surface_substep(
                     &mut s.contacts,
                     &mut velocities,
                 );
-                owners.resize(s.contacts.len(), t.handle);
+                let owner = PressOwner {
+                    tool: t.handle,
+                    friction,
+                    grasp: t.grasp,
+                };
+                owners.resize(s.contacts.len(), owner);
             }
         }
-        press_all(
+        // Grasping tools hold the points they pressed (pressing::GraspedPoint).
+        let graspers: Vec<Grasper> = tools
+            .iter()
+            .filter(|t| t.grasp)
+            .map(|t| (t.handle, inv * t.start, inv * t.end))
+            .collect();
+        let first_grasped = add_grasped(
+            &mut s.grasped,
+            &graspers,
+            &s.scratch,
+            h,
+            &mut s.contacts,
+            &mut velocities,
+            &mut owners,
+        );
+        let ids = press_all(
             &mut s.surface,
             &s.contacts,
             &velocities,
             &owners,
             &mut s.pressed,
+        );
+        let new = ..first_grasped.min(ids.len());
+        record_grasped(
+            &mut s.grasped,
+            &graspers,
+            &s.contacts[new],
+            &owners[new],
+            &ids[new],
         );
     }
     out

@@ -5,11 +5,16 @@
 //! ([`MassSpringSurface::press_point`]), loading the vertices around it by their weights inside
 //! the filter's constraint solve. The tool gets the impulses those holds gave: the press's own
 //! velocity change and the next surface step's constraint impulse.
+//!
+//! With friction each point also sticks or slides: Coulomb's law on the step's own impulses,
+//! solved by the surface with its other constraints ([`Tangential::Coulomb`]); a grasping tool
+//! holds its points in every direction ([`Tangential::Grasped`]).
 
+use super::friction::Friction;
 use super::tool_shape::contact_margin;
-use crate::geometry::{tool_surface_contacts, SurfaceContact, SurfaceSnapshot, TouchMesh};
+use crate::geometry::{tool_surface_contacts, Feature, SurfaceContact, SurfaceSnapshot, TouchMesh};
 use crate::math::{Pose, Real, Vector};
-use crate::surface::{MassSpringSurface, PointPress};
+use crate::surface::{MassSpringSurface, PointPress, Tangential};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::geometry::ColliderHandle;
 
@@ -25,6 +30,18 @@ pub(super) struct Pressed {
     /// The impulse the hold gave from the press through the surface step after it (N·s, along
     /// `normal`), filled in by [`record_impulses`].
     pub impulse: Real,
+    /// The impulse the tool gave the point along its tangent plane through that step (N·s,
+    /// friction), filled in by [`record_impulses`].
+    pub tangent_impulse: Vector,
+}
+
+/// The tool a contact belongs to, as [`press_all`] needs it.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct PressOwner {
+    pub tool: ColliderHandle,
+    pub friction: Friction,
+    /// Whether the tool grasps (its points are held in every direction).
+    pub grasp: bool,
 }
 
 /// Reads the impulses the holds of `pressed` gave up to the end of the surface step just taken
@@ -32,12 +49,12 @@ pub(super) struct Pressed {
 pub(super) fn record_impulses(surface: &MassSpringSurface, pressed: &mut [Pressed]) {
     for p in pressed {
         p.impulse = surface.point_impulse(p.id).unwrap_or(0.0);
+        p.tangent_impulse = surface.point_tangent_impulse(p.id).unwrap_or(Vector::ZERO);
     }
 }
 
 /// Force (on the tool, surface frame), `Σ p × f` and count of the points `tool` pressed during
-/// the surface step just taken (`h` its time step). A hold that pulled (negative impulse)
-/// gives no force.
+/// the surface step just taken (`h` its time step): normal and friction, or a grasp's pull.
 pub(super) fn reaction_of(
     pressed: &[Pressed],
     tool: ColliderHandle,
@@ -48,14 +65,21 @@ pub(super) fn reaction_of(
         return (force, moment, count);
     }
     for p in pressed.iter().filter(|p| p.tool == tool) {
-        if p.impulse > 0.0 {
-            let f = -p.normal * (p.impulse / h);
+        if p.impulse != 0.0 {
+            let f = p.force_on_tool(h);
             force += f;
             moment += p.point.cross(f);
             count += 1;
         }
     }
     (force, moment, count)
+}
+
+impl Pressed {
+    /// The force the point put on the tool through the step (`h` long).
+    fn force_on_tool(&self, h: Real) -> Vector {
+        -(self.normal * self.impulse + self.tangent_impulse) / h
+    }
 }
 
 /// Where the surface may meet `mesh` moving from `start` to `end` (surface frame): its swept
@@ -76,8 +100,8 @@ fn part_sweep(mesh: &TouchMesh, start: &Pose, end: &Pose) -> (Aabb, Real) {
 /// Finds the contacts of `mesh` (moving from `start` to `end`, surface frame) with the surface
 /// (`before`: positions at the start of the substep, `now`: at its end; `candidates`: a
 /// superset of the triangles whose bounds over the substep meet [`part_query`], sorted; `kept`:
-/// scratch) and appends them to `contacts`, with the tool's velocity along each contact's
-/// normal in `velocities`.
+/// scratch) and appends them to `contacts`, with the velocity of the tool's material point at
+/// each in `velocities`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn find_contacts(
     triangles: &[[u32; 3]],
@@ -89,7 +113,7 @@ pub(super) fn find_contacts(
     before: &[Vector],
     now: &[Vector],
     contacts: &mut Vec<SurfaceContact>,
-    velocities: &mut Vec<Real>,
+    velocities: &mut Vec<Vector>,
 ) {
     let (query, margin) = part_sweep(mesh, start, end);
     let snapshot = SurfaceSnapshot {
@@ -111,49 +135,206 @@ pub(super) fn find_contacts(
     let first = contacts.len();
     tool_surface_contacts(&snapshot, candidates, mesh, start, end, margin, contacts);
     for c in &contacts[first..] {
-        // The tool's material point under the contact: its velocity along the normal.
+        // The tool's material point under the contact: its velocity.
         let material = end.inverse_transform_point(c.point);
         velocities.push(if h > 0.0 {
-            (c.point - start.transform_point(material)).dot(c.normal) / h
+            (c.point - start.transform_point(material)) / h
         } else {
-            0.0
+            Vector::ZERO
         });
     }
 }
 
 /// Presses every contact (all tools together, so presses sharing a vertex do not undo each
-/// other) and records them in `pressed` (`owners[i]`: the tool of `contacts[i]`).
+/// other) and records them in `pressed` (`owners[i]`: the tool of `contacts[i]`; `velocities`:
+/// its material point's velocity there). Returns each contact's hold, if pressed.
 pub(super) fn press_all(
     surface: &mut MassSpringSurface,
     contacts: &[SurfaceContact],
-    velocities: &[Real],
-    owners: &[ColliderHandle],
+    velocities: &[Vector],
+    owners: &[PressOwner],
     pressed: &mut Vec<Pressed>,
-) {
+) -> Vec<Option<usize>> {
     let presses: Vec<PointPress<'_>> = contacts
         .iter()
         .zip(velocities)
-        .map(|(c, &v)| PointPress {
+        .zip(owners)
+        .map(|((c, &v), owner)| PointPress {
             vertices: c.weights(),
             normal: c.normal,
             depth: c.depth,
-            normal_velocity: v,
+            normal_velocity: v.dot(c.normal),
+            tangential: friction_of(v, owner),
         })
         .collect();
     // The geometry layer's contacts are finite, with weights on existing vertices: an error
     // here would mean a bug, and then nothing is pressed in this substep.
     let Ok(ids) = surface.press_points(&presses) else {
-        return;
+        return Vec::new();
     };
-    for ((c, id), tool) in contacts.iter().zip(ids).zip(owners) {
-        if let Some(id) = id {
-            pressed.push(Pressed {
-                tool: *tool,
-                id,
-                normal: c.normal,
-                point: c.point,
-                impulse: 0.0,
-            });
+    for ((c, id), owner) in contacts.iter().zip(&ids).zip(owners) {
+        let Some(id) = *id else {
+            continue;
+        };
+        pressed.push(Pressed {
+            tool: owner.tool,
+            id,
+            normal: c.normal,
+            point: c.point,
+            impulse: 0.0,
+            tangent_impulse: Vector::ZERO,
+        });
+    }
+    ids
+}
+
+/// What the tool does along a point's tangent plane: Coulomb friction with the tool's
+/// material point there (moving with `v`), which the surface solves with the step's other
+/// constraints; a grasping tool holds it in every direction.
+fn friction_of(v: Vector, owner: &PressOwner) -> Tangential {
+    if owner.grasp {
+        Tangential::Grasped(v)
+    } else if owner.friction.is_frictionless() {
+        Tangential::Free
+    } else {
+        Tangential::Coulomb {
+            velocity: v,
+            static_coefficient: owner.friction.static_coefficient,
+            dynamic_coefficient: owner.friction.dynamic_coefficient,
         }
+    }
+}
+
+/// A surface point a grasping tool holds, from the substep it pressed it (in contact) until it
+/// lets go: the point's vertices and weights, and the tool's material point and normal there
+/// (the collider's frame). Each substep it is pressed onto that material point, bilateral
+/// ([`Tangential::Grasped`]), however far the tool has moved: a grasper lifts a fold it holds
+/// between the surface's vertices as well as one it holds by a vertex.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct GraspedPoint {
+    tool: ColliderHandle,
+    feature: Feature,
+    surface: [(u32, Real); 3],
+    count: usize,
+    local: Vector,
+    local_normal: Vector,
+}
+
+impl GraspedPoint {
+    /// Whether the point and the contact `c` load a vertex in common.
+    fn shares_a_vertex(&self, c: &SurfaceContact) -> bool {
+        let mine = &self.surface[..self.count.min(3)];
+        c.weights()
+            .iter()
+            .any(|(v, _)| mine.iter().any(|(u, _)| u == v))
+    }
+}
+
+/// A grasping tool over the substep (surface frame): its collider, its poses at the start and
+/// the end.
+pub(super) type Grasper = (ColliderHandle, Pose, Pose);
+
+/// Appends the grasped points of the tools still grasping (`graspers`) to the contacts, each
+/// pressed onto its material point with that point's velocity (plus what closes its
+/// tangential gap over the substep, `h` long), and drops the grasping tools' new contacts that
+/// load a grasped point's vertices (the grasped points hold them, and two bilateral points on
+/// the same vertices with targets that differ a little fight: huge impulses); forgets the
+/// points of tools that let go. `positions`: the surface's vertices now. Returns where the
+/// grasped points start in `contacts`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn add_grasped(
+    grasped: &mut Vec<GraspedPoint>,
+    graspers: &[Grasper],
+    positions: &[Vector],
+    h: Real,
+    contacts: &mut Vec<SurfaceContact>,
+    velocities: &mut Vec<Vector>,
+    owners: &mut Vec<PressOwner>,
+) -> usize {
+    grasped.retain(|g| graspers.iter().any(|t| t.0 == g.tool));
+    if !grasped.is_empty() {
+        let held = |c: &SurfaceContact, o: &PressOwner| {
+            o.grasp && grasped.iter().any(|g| g.shares_a_vertex(c))
+        };
+        let mut k = 0;
+        for i in 0..contacts.len() {
+            if !held(&contacts[i], &owners[i]) {
+                contacts.swap(k, i);
+                velocities.swap(k, i);
+                owners.swap(k, i);
+                k += 1;
+            }
+        }
+        contacts.truncate(k);
+        velocities.truncate(k);
+        owners.truncate(k);
+    }
+    let first = contacts.len();
+    for g in grasped.iter() {
+        let Some((_, start, end)) = graspers.iter().find(|t| t.0 == g.tool) else {
+            continue;
+        };
+        let material = end.transform_point(g.local);
+        let normal = end.rotation * g.local_normal;
+        let point: Vector = g.surface[..g.count]
+            .iter()
+            .filter_map(|&(v, w)| positions.get(v as usize).map(|p| *p * w))
+            .sum();
+        let gap = material - point;
+        let depth = gap.dot(normal);
+        let velocity = if h > 0.0 {
+            (material - start.transform_point(g.local) + (gap - normal * depth)) / h
+        } else {
+            Vector::ZERO
+        };
+        if !(velocity.is_finite() && depth.is_finite() && normal.is_finite()) {
+            continue;
+        }
+        contacts.push(SurfaceContact {
+            tool_feature: g.feature,
+            surface: g.surface,
+            count: g.count,
+            normal,
+            depth,
+            point: material,
+        });
+        velocities.push(velocity);
+        owners.push(PressOwner {
+            tool: g.tool,
+            friction: Friction::NONE,
+            grasp: true,
+        });
+    }
+    first
+}
+
+/// Records the new contacts (`contacts`, before the grasped points) that a grasping tool
+/// pressed in contact (`ids`: their holds) as grasped points, each on vertices no other
+/// grasped point loads.
+pub(super) fn record_grasped(
+    grasped: &mut Vec<GraspedPoint>,
+    graspers: &[Grasper],
+    contacts: &[SurfaceContact],
+    owners: &[PressOwner],
+    ids: &[Option<usize>],
+) {
+    for ((c, o), id) in contacts.iter().zip(owners).zip(ids) {
+        if !o.grasp || id.is_none() || c.depth < 0.0 {
+            continue;
+        }
+        if grasped.iter().any(|g| g.shares_a_vertex(c)) {
+            continue;
+        }
+        let Some((_, _, end)) = graspers.iter().find(|t| t.0 == o.tool) else {
+            continue;
+        };
+        grasped.push(GraspedPoint {
+            tool: o.tool,
+            feature: c.tool_feature,
+            surface: c.surface,
+            count: c.count,
+            local: end.inverse_transform_point(c.point),
+            local_normal: end.rotation.inverse() * c.normal,
+        });
     }
 }

@@ -4,7 +4,7 @@ use super::events::{ToolTouchEvent, TouchTracker};
 use super::friction::{Friction, Sticks};
 use super::haptic_links::LinkState;
 use super::holding::{attached_with_pose, lerp_pose, surface_substep, HeldContacts, ToolMotion};
-use super::pressing::Pressed;
+use super::pressing::{GraspedPoint, Pressed};
 use super::search::ContactSearch;
 use super::tool_shape::ToolShape;
 use crate::geometry::SurfaceContact;
@@ -162,6 +162,8 @@ pub struct AttachedSurface {
     pub(super) contacts: Vec<SurfaceContact>,
     /// Vertices stuck to a tool (friction).
     pub(super) sticks: Sticks,
+    /// Points grasping tools hold.
+    pub(super) grasped: Vec<GraspedPoint>,
     /// Friction of given tools on this surface, in place of the tool's own.
     pub(super) pair_friction: HashMap<ColliderHandle, Friction>,
 }
@@ -238,7 +240,9 @@ pub(super) struct ToolState {
 /// its springs pull it away from the tool. The filter then spreads that deformation over the
 /// next substep. The reaction on a tool is the sum of the spring and damper forces of the
 /// vertices it holds: their normal parts, and the tangential parts of those that stick or
-/// kinetic friction for those that slip.
+/// kinetic friction for those that slip; plus the impulses of the points it presses between
+/// vertices (normal, and with friction tangential: [`crate::surface::Tangential`]). A
+/// grasping tool also holds those points, in every direction, until it lets go.
 /// Dynamic tools carry the substep-averaged reaction as a rapier force through the next rigid
 /// step (one step of lag), and surface colliders are updated once per rigid step
 /// (`TriMesh::set_vertices`, a BVH refit).
@@ -399,6 +403,7 @@ impl SurfaceSet {
             last_pressed: Vec::new(),
             search: ContactSearch::default(),
             sticks: Sticks::default(),
+            grasped: Vec::new(),
             pair_friction: HashMap::default(),
             contacts: Vec::new(),
             scratch: verts,

@@ -17,13 +17,14 @@ mod changes;
 mod constraints;
 mod dynamics;
 mod motion_watch;
+mod presses;
 use baraff_witkin::CgScratch;
 use builder::check_spring;
 pub use builder::MassSpringSurfaceBuilder;
-pub use constraints::PointPress;
 use constraints::{constrain, ActiveMemory, PointHold};
 pub use motion_watch::Escaped;
 use motion_watch::MotionWatch;
+pub use presses::{PointPress, Tangential};
 
 /// Why a surface could not be built or changed. Each variant says how to fix the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -14,5 +14,6 @@ pub mod meshing;
 pub use filter::{FilterError, FilterKind};
 pub use mass_spring_surface::{
     Escaped, ForceProfile, Integrator, MassDistribution, MassSpringSurface,
-    MassSpringSurfaceBuilder, PointPress, SpringModel, SurfaceError, DEFAULT_AREA_DENSITY,
+    MassSpringSurfaceBuilder, PointPress, SpringModel, SurfaceError, Tangential,
+    DEFAULT_AREA_DENSITY,
 };

@@ -17,6 +17,7 @@ mod main_loop;
 mod mesh_inputs;
 mod pair_events;
 mod pipeline;
+mod point_friction;
 mod prelude;
 mod rapier_semantics;
 mod reconstruction_bad_input;

@@ -586,6 +586,33 @@ fn bad_point_presses_are_errors() {
         s.press_point(&[(99, 1.0)], down, 0.01, 0.0),
         Err(SurfaceError::VertexOutOfRange { .. })
     ));
+    // Friction that is not a number, negative, or kinetic above static.
+    let coulomb = |v: Vector, s: f32, d: f32| Tangential::Coulomb {
+        velocity: v,
+        static_coefficient: s,
+        dynamic_coefficient: d,
+    };
+    for tangential in [
+        coulomb(Vector::X, 0.5, -0.1),
+        coulomb(Vector::X, 0.2, 0.3),
+        coulomb(Vector::X, f32::NAN, 0.3),
+        coulomb(Vector::X, f32::INFINITY, 0.3),
+        coulomb(Vector::new(f32::NAN, 0.0, 0.0), 0.5, 0.3),
+        Tangential::Grasped(Vector::splat(f32::INFINITY)),
+    ] {
+        let press = PointPress {
+            vertices: &[(1, 0.5), (2, 0.5)],
+            normal: down,
+            depth: 0.01,
+            normal_velocity: 0.0,
+            tangential,
+        };
+        assert_eq!(
+            s.press_points(&[press]),
+            Err(SurfaceError::InvalidPointHold),
+            "{tangential:?}"
+        );
+    }
     let after: Vec<Vector> = (0..s.num_vertices() as u32)
         .map(|i| s.position(i))
         .collect();

@@ -144,8 +144,8 @@ impl SurfaceSet {
     /// Sets the Coulomb friction of registered tool `tool` on every surface (that has no
     /// friction of its own for it, [`SurfaceSet::set_pair_friction`]). Tools start
     /// frictionless. Friction acts where the tool holds surface vertices (see
-    /// [`super::Friction`]); the points a polyhedral tool presses between vertices stay
-    /// frictionless.
+    /// [`super::Friction`]) and at the points a polyhedral tool presses between vertices
+    /// (solved with the surface's constraints, [`crate::surface::Tangential::Coulomb`]).
     ///
     /// # Errors
     /// [`CouplingError::NoSuchCollider`] when `tool` is not a registered tool,

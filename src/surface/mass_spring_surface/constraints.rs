@@ -6,28 +6,36 @@
 
 use super::active_set::{give_back, solve_pushing, zeroed, Scratch};
 use super::blocks::independent_blocks;
-use super::{motion_watch, MassSpringSurface, SurfaceError, NOT_FREE};
-use crate::math::{Real, Vector};
+use super::NOT_FREE;
 use crate::surface::filter::{Filter, FilterKind};
 use glamx::DVec3;
+use parry3d::utils::hashmap::HashMap;
 use parry3d::utils::hashset::HashSet;
 
 /// A point of the surface, `Σ wⱼ xⱼ` over up to three vertices, pressed along a normal by
 /// something outside it (see [`MassSpringSurface::press_point`]).
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct PointHold {
-    vertices: [u32; 3],
-    weights: [f64; 3],
-    count: usize,
+    pub(super) vertices: [u32; 3],
+    pub(super) weights: [f64; 3],
+    pub(super) count: usize,
     /// Unit direction the holder pushes the point in.
-    normal: DVec3,
+    pub(super) normal: DVec3,
     /// The impulse (N·s, along `normal`) the holder gave: the press's velocity change, plus the
     /// constraint impulse of the step after it.
-    impulse: f64,
+    pub(super) impulse: f64,
     /// The least velocity along `normal` the point may have after the step: the holder's for
     /// a point in contact; less by `gap / dt` for a point `gap` short of its holder (it may
     /// close the gap, not pass the holder).
-    min_velocity: f64,
+    pub(super) min_velocity: f64,
+    /// The velocity the point keeps along its tangent plane through the step while it pushes
+    /// (its holder carries it: static friction), or `None` (it slides freely).
+    pub(super) carried: Option<DVec3>,
+    /// The static and dynamic friction coefficients that bound the carrying impulse (`None`:
+    /// carried whatever it takes, a grasp, with a bilateral normal).
+    pub(super) cone: Option<(f64, f64)>,
+    /// The impulse (N·s, in the tangent plane) the holder gave carrying it.
+    pub(super) tangent_impulse: DVec3,
 }
 
 impl PointHold {
@@ -41,7 +49,12 @@ impl PointHold {
         v
     }
 
-    fn entries(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
+    /// Held in every direction, pulled as well as pushed.
+    pub(super) fn grasped(&self) -> bool {
+        self.carried.is_some() && self.cone.is_none()
+    }
+
+    pub(super) fn entries(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
         self.vertices[..self.count]
             .iter()
             .copied()
@@ -58,8 +71,10 @@ impl PointHold {
 pub(crate) struct ActiveMemory {
     seen: HashSet<[u32; 3]>,
     pushing: HashSet<[u32; 3]>,
+    /// How the points with friction ended the step: the next step's solve starts from it.
+    friction: HashMap<[u32; 3], Remembered>,
     /// The solves' dense storage, reused.
-    scratch: Scratch,
+    pub(super) scratch: Scratch,
 }
 
 impl ActiveMemory {
@@ -72,306 +87,6 @@ impl ActiveMemory {
     }
 }
 
-/// The least weight a pressed point must have on vertices that can move.
-const MIN_MOVABLE_WEIGHT: f64 = 0.25;
-
-/// One point to press (see [`MassSpringSurface::press_points`]).
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct PointPress<'a> {
-    /// Up to three `(vertex, weight)` pairs, weights ≥ 0 (normalised to sum to one): the
-    /// surface point `Σ wⱼ xⱼ`.
-    pub vertices: &'a [(u32, Real)],
-    /// The direction the holder pushes the point in (normalised).
-    pub normal: Vector,
-    /// How far to move the point along `normal` now (m).
-    pub depth: Real,
-    /// The point's velocity along `normal` from now on (m/s): the holder's.
-    pub normal_velocity: Real,
-}
-
-impl MassSpringSurface {
-    /// Presses one surface point: [`MassSpringSurface::press_points`] with one press.
-    ///
-    /// # Errors
-    /// As [`MassSpringSurface::press_points`].
-    ///
-    /// # Example
-    /// A needle tip pressing 1 cm into the middle of a triangle of a plate, held there:
-    /// ```
-    /// use rapier_touch::prelude::*;
-    /// use rapier_touch::surface::meshing::plate;
-    ///
-    /// let mesh = plate(1.0, 1.0, 4, 4);
-    /// let rim = |v: Vector| v.x.abs() > 0.49 || v.z.abs() > 0.49;
-    /// let edge: Vec<u32> = (0..mesh.vertices.len() as u32)
-    ///     .filter(|&i| rim(mesh.vertices[i as usize]))
-    ///     .collect();
-    /// let mut surface = MassSpringSurfaceBuilder::from_mesh(&mesh).pinned(edge).build().unwrap();
-    /// // A triangle with no pinned vertex.
-    /// let [a, b, c] = *surface
-    ///     .triangles()
-    ///     .iter()
-    ///     .find(|t| t.iter().all(|&v| !surface.is_pinned(v)))
-    ///     .unwrap();
-    /// let point = |s: &MassSpringSurface| (s.position(a) + s.position(b) + s.position(c)) / 3.0;
-    /// let third = 1.0 / 3.0;
-    /// let down = Vector::new(0.0, -1.0, 0.0);
-    /// let id = surface.press_point(&[(a, third), (b, third), (c, third)], down, 0.01, 0.0);
-    /// let id = id.unwrap().unwrap();
-    /// assert!((point(&surface).y + 0.01).abs() < 1e-6);
-    /// surface.step();
-    /// // Held along the normal: the springs did not pull the point back up.
-    /// assert!((point(&surface).y + 0.01).abs() < 1e-6);
-    /// assert!(surface.point_impulse(id).unwrap() > 0.0);
-    /// ```
-    pub fn press_point(
-        &mut self,
-        vertices: &[(u32, Real)],
-        normal: Vector,
-        depth: Real,
-        normal_velocity: Real,
-    ) -> Result<Option<usize>, SurfaceError> {
-        let press = PointPress {
-            vertices,
-            normal,
-            depth,
-            normal_velocity,
-        };
-        Ok(self.press_points(&[press])?.pop().flatten())
-    }
-
-    /// Presses surface points — a tool's vertex inside a triangle (the paper's eq. 3 situation),
-    /// a tool's edge across a surface edge — each by its `depth` along its `normal`, gives each
-    /// its `normal_velocity`, and holds them there along their normals for the next step, until
-    /// [`MassSpringSurface::release_all`].
-    ///
-    /// The position and velocity changes are the least mass-weighted ones that give every point
-    /// its depth and velocity together (a small dense solve over the points: presses sharing a
-    /// vertex do not undo each other). Pinned and held vertices do not move. In the next
-    /// filtered step each point keeps its normal velocity: its impulse is solved with the vertex
-    /// holds' through the filter's columns at its vertices; it is free along its tangent plane
-    /// (frictionless), and a point whose impulse would pull is let go. A press with a negative
-    /// `depth` (its holder is that far above it), or one the others' pushes already satisfy
-    /// (pushing one point of a triangle moves its neighbours), is not moved and is held as a
-    /// speculative contact: over the next step it may close its gap to the holder, not pass it. Returns each press's index
-    /// for [`MassSpringSurface::point_impulse`], or `None` for a press on a held vertex (its
-    /// holder carries the contact there) or with less than a quarter of its weight on free
-    /// vertices (its pinned vertices carry it). The explicit and Baraff-Witkin integrators apply
-    /// the position and velocity changes but do not hold the points during the step.
-    ///
-    /// # Errors
-    /// [`SurfaceError::VertexOutOfRange`]; [`SurfaceError::InvalidPointHold`] for a press with
-    /// no vertex or more than three, a negative or non-finite weight, weights summing to zero, a
-    /// zero or non-finite normal, a non-finite depth or velocity. Nothing is pressed then.
-    pub fn press_points(
-        &mut self,
-        presses: &[PointPress<'_>],
-    ) -> Result<Vec<Option<usize>>, SurfaceError> {
-        let mut holds = Vec::with_capacity(presses.len());
-        for p in presses {
-            holds.push(self.point_hold(p)?);
-        }
-        // The movable share of each vertex: 1/m, zero for pinned vertices (presses on held
-        // vertices are not kept, below).
-        let inv_mass = |s: &Self, v: u32| {
-            let v = v as usize;
-            if s.pinned[v] {
-                0.0
-            } else {
-                1.0 / s.mass[v]
-            }
-        };
-        let mut out = Vec::with_capacity(presses.len());
-        let mut kept: Vec<(PointHold, f64, f64)> = Vec::new();
-        for (hold, p) in holds.into_iter().zip(presses) {
-            // The weight on vertices that can move: a point mostly on pinned vertices is
-            // carried by them (moving it would fling its free vertex by depth / weight).
-            let movable: f64 = hold
-                .entries()
-                .filter(|&(v, _)| inv_mass(self, v) > 0.0)
-                .map(|(_, w)| w)
-                .sum();
-            // A point on a held vertex is left to that vertex's holder, which already
-            // carries the contact there.
-            let on_held = hold
-                .entries()
-                .any(|(v, w)| w > 0.0 && self.held[v as usize]);
-            if movable >= MIN_MOVABLE_WEIGHT && !on_held {
-                let velocity: f64 = hold
-                    .entries()
-                    .map(|(v, w)| w * self.vel[v as usize].dot(hold.normal))
-                    .sum();
-                out.push(Some(self.point_holds.len() + kept.len()));
-                kept.push((hold, p.depth as f64, p.normal_velocity as f64 - velocity));
-            } else {
-                out.push(None);
-            }
-        }
-        let m = kept.len();
-        if m == 0 {
-            return Ok(out);
-        }
-        // A = J M⁻¹ Jᵀ over the kept presses; δx = M⁻¹ Jᵀ μ with A μ = depth (likewise for the
-        // velocities).
-        let mut scratch = std::mem::take(&mut self.pushing.scratch);
-        let mut a = zeroed(&mut scratch.system, m, m);
-        // Two presses meet only on the vertices they share: the (vertex, press, weight)
-        // entries sorted by vertex give the nonzero pairs (not all m² of them).
-        let mut on_vertex: Vec<(u32, usize, f64)> = kept
-            .iter()
-            .enumerate()
-            .flat_map(|(i, (h, _, _))| h.entries().map(move |(v, w)| (v, i, w)))
-            .collect();
-        on_vertex.sort_unstable_by_key(|e| (e.0, e.1));
-        for run in on_vertex.chunk_by(|x, y| x.0 == y.0) {
-            let im = inv_mass(self, run[0].0);
-            for &(_, i, wi) in run {
-                for &(_, j, wj) in run {
-                    let nn = kept[i].0.normal.dot(kept[j].0.normal);
-                    a[(i, j)] += nn * wi * wj * im;
-                }
-            }
-        }
-        let scale = (0..m).map(|i| a[(i, i)]).fold(0.0, f64::max);
-        for i in 0..m {
-            a[(i, i)] += 1e-12 * scale;
-        }
-        let solved = solve_presses(&a, &kept, &mut scratch.factor);
-        if let Some(PressImpulses {
-            mu,
-            active,
-            rows,
-            nu,
-        }) = &solved
-        {
-            for (r, &i) in rows.iter().enumerate() {
-                let hold = &mut kept[i].0;
-                // The impulse the press gave: the start of what the hold reports.
-                hold.impulse = nu[r];
-                for (v, w) in hold.entries() {
-                    let share = w * inv_mass(self, v);
-                    self.pos[v as usize] += hold.normal * (share * mu[i]);
-                    motion_watch::note(&mut self.watch, v as usize, self.pos[v as usize]);
-                    self.vel[v as usize] += hold.normal * (share * nu[r]);
-                }
-            }
-            // A press left out is `gap` short of its holder (its own negative depth, or where
-            // the others' pushes put it): it is held as a speculative contact that may close
-            // the gap over the next step, not more.
-            for (i, k) in kept.iter_mut().enumerate() {
-                if active[i] {
-                    continue;
-                }
-                // Row i of the symmetric `a`, read down its column (contiguous, and no
-                // transposed copy of `mu` per press).
-                let gap = (a.column(i).dot(mu) - k.1).max(0.0);
-                let velocity: f64 =
-                    k.0.entries()
-                        .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
-                        .sum();
-                // The holder's velocity, as given, is the current point velocity plus `k.2`.
-                k.0.min_velocity = velocity + k.2 - gap / self.dt;
-            }
-        }
-        give_back(&mut scratch.system, a);
-        self.pushing.scratch = scratch;
-        if solved.is_none() {
-            return Ok(out.iter().map(|_| None).collect());
-        }
-        self.point_holds.extend(kept.into_iter().map(|(h, _, _)| h));
-        Ok(out)
-    }
-
-    /// A press checked and normalised.
-    fn point_hold(&self, p: &PointPress<'_>) -> Result<PointHold, SurfaceError> {
-        let vertices = p.vertices;
-        if vertices.is_empty() || vertices.len() > 3 {
-            return Err(SurfaceError::InvalidPointHold);
-        }
-        for &(v, w) in vertices {
-            self.check_vertex(v)?;
-            if !(w.is_finite() && w >= 0.0) {
-                return Err(SurfaceError::InvalidPointHold);
-            }
-        }
-        let total: f64 = vertices.iter().map(|&(_, w)| w as f64).sum();
-        let n = p.normal.as_dvec3().try_normalize();
-        let (Some(n), true, true) = (
-            n,
-            total > 0.0 && total.is_finite(),
-            p.depth.is_finite() && p.normal_velocity.is_finite(),
-        ) else {
-            return Err(SurfaceError::InvalidPointHold);
-        };
-        let mut hold = PointHold {
-            vertices: [0; 3],
-            weights: [0.0; 3],
-            count: vertices.len(),
-            normal: n,
-            impulse: 0.0,
-            min_velocity: p.normal_velocity as f64,
-        };
-        for (k, &(v, w)) in vertices.iter().enumerate() {
-            hold.vertices[k] = v;
-            hold.weights[k] = w as f64 / total;
-        }
-        Ok(hold)
-    }
-
-    /// The impulse (N·s, along its normal; positive when pushing) hold `id` of
-    /// [`MassSpringSurface::press_points`] has given the surface: the press's own velocity
-    /// change, plus the constraint impulse of the filtered step after it (all the momentum the
-    /// holder gave the surface from the press to the end of that step). `None` for no such
-    /// hold.
-    pub fn point_impulse(&self, id: usize) -> Option<Real> {
-        self.point_holds.get(id).map(|h| h.impulse as Real)
-    }
-
-    /// How many points are held (see [`MassSpringSurface::press_point`]).
-    pub fn num_point_holds(&self) -> usize {
-        self.point_holds.len()
-    }
-}
-
-/// What the presses' solves give (see [`solve_presses`]).
-struct PressImpulses {
-    /// Position impulse per press (zero on those left out).
-    mu: nalgebra::DVector<f64>,
-    /// Which presses push.
-    active: Vec<bool>,
-    /// The pushing presses, and their velocity impulses in that order.
-    rows: Vec<usize>,
-    nu: nalgebra::DVector<f64>,
-}
-
-/// The presses' solves over `a = J M⁻¹ Jᵀ` (`kept`: each press with its depth and the normal
-/// velocity its holder asks for): position impulses, push-only, then, for the presses that
-/// push, velocity impulses that bring them to their holders' normal velocity, again push-only
-/// (a point already leaving its holder faster keeps its velocity). `None` when a solve fails.
-fn solve_presses(
-    a: &nalgebra::DMatrix<f64>,
-    kept: &[(PointHold, f64, f64)],
-    factor: &mut Vec<f64>,
-) -> Option<PressImpulses> {
-    let m = kept.len();
-    // Positions: presses only push; one with a negative depth (a speculative contact short
-    // of its holder) or that the others' pushes satisfy is left out.
-    let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
-    let tol = 1e-9 * depth.amax();
-    let (mu, active) = solve_pushing(a, &depth, |_| true, |i| depth[i] > 0.0, tol, factor)?;
-    let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
-    let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
-    let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
-    let vtol = 1e-9 * (1.0 + dv.amax());
-    let (nu, _) = solve_pushing(&sub, &dv, |_| true, |i| dv[i] > 0.0, vtol, factor)?;
-    Some(PressImpulses {
-        mu,
-        active,
-        rows,
-        nu,
-    })
-}
-
 /// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
 /// weighted set of vertices: a sliding vertex hold (its normal, weight 1), a full vertex hold
 /// (the three axes), a point hold (its normal, its barycentric weights). With `J` the
@@ -381,7 +96,10 @@ fn solve_presses(
 /// rest of the surface then responds to the holds as to pins moving where the holders put them,
 /// and a point hold whose impulse would pull is let go (contact only pushes),
 /// at any `s`, without refactoring the filter: `P`'s columns for the held vertices are the
-/// filter's own rows (neighbour) or one cached solve each (exact).
+/// filter's own rows (neighbour) or one cached solve each (exact). A point its holder carries
+/// (static friction) has two more rows, bilateral, along its tangent plane: they hold its
+/// tangential velocity at the holder's while its normal row pushes, and go with it when it is
+/// let go.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn constrain(
     filter: &mut Filter,
@@ -416,8 +134,8 @@ pub(super) fn constrain(
         return;
     }
     let slot = |fi: u32| list.binary_search(&fi).ok();
-    // Constraints: direction, (slot, weight) entries, and which point hold (if any).
-    type Con = (DVec3, [(usize, f64); 3], usize, Option<usize>);
+    // Constraints: direction, (slot, weight) entries, and what they hold.
+    type Con = (DVec3, [(usize, f64); 3], usize, Row);
     let mut cons: Vec<Con> = Vec::with_capacity(h);
     for (k, &fi) in list.iter().enumerate() {
         let v = free[fi as usize] as usize;
@@ -427,9 +145,9 @@ pub(super) fn constrain(
         let entry = [(k, 1.0), (0, 0.0), (0, 0.0)];
         let n = held_normal[v];
         if n == DVec3::ZERO {
-            cons.extend([DVec3::X, DVec3::Y, DVec3::Z].map(|d| (d, entry, 1, None)));
+            cons.extend([DVec3::X, DVec3::Y, DVec3::Z].map(|d| (d, entry, 1, Row::Vertex)));
         } else {
-            cons.push((n, entry, 1, None));
+            cons.push((n, entry, 1, Row::Vertex));
         }
     }
     for (pi, p) in points.iter().enumerate() {
@@ -442,7 +160,22 @@ pub(super) fn constrain(
             }
         }
         if count > 0 {
-            cons.push((p.normal, entry, count, Some(pi)));
+            cons.push((p.normal, entry, count, Row::Normal(pi)));
+            if p.carried.is_some() {
+                let (t1, t2) = p.normal.any_orthonormal_pair();
+                cons.push((t1, entry, count, Row::Tangent(pi)));
+                cons.push((t2, entry, count, Row::Tangent(pi)));
+            }
+        }
+    }
+    // The normal row of each point hold, and its tangent rows.
+    let mut normal_row = vec![usize::MAX; points.len()];
+    let mut tangent_rows: Vec<Option<(usize, usize)>> = vec![None; points.len()];
+    for (c, con) in cons.iter().enumerate() {
+        match con.3 {
+            Row::Normal(pi) => normal_row[pi] = c,
+            Row::Tangent(pi) if tangent_rows[pi].is_none() => tangent_rows[pi] = Some((c, c + 1)),
+            _ => {}
         }
     }
     // P restricted to the involved vertices (h × h), one column read each.
@@ -469,20 +202,26 @@ pub(super) fn constrain(
     // velocity.
     let rhs: Vec<f64> = cons
         .iter()
-        .map(|(da, ea, na, point)| match point {
-            None => -ea[..*na]
-                .iter()
-                .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
-                .sum::<f64>(),
-            Some(pi) => {
-                points[*pi].min_velocity
-                    - ea[..*na]
-                        .iter()
-                        .map(|&(k, w)| {
-                            let fi = list[k] as usize;
-                            w * da.dot(vel[free[fi] as usize] + dv[fi])
-                        })
-                        .sum::<f64>()
+        .map(|(da, ea, na, row)| {
+            // The point's velocity along `da` after the step as it stands.
+            let along = || {
+                ea[..*na]
+                    .iter()
+                    .map(|&(k, w)| {
+                        let fi = list[k] as usize;
+                        w * da.dot(vel[free[fi] as usize] + dv[fi])
+                    })
+                    .sum::<f64>()
+            };
+            match *row {
+                Row::Vertex => -ea[..*na]
+                    .iter()
+                    .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
+                    .sum::<f64>(),
+                Row::Normal(pi) => points[pi].min_velocity - along(),
+                Row::Tangent(pi) => {
+                    points[pi].carried.map_or(0.0, |target| da.dot(target)) - along()
+                }
             }
         })
         .collect();
@@ -494,7 +233,10 @@ pub(super) fn constrain(
     let tol = 1e-9 * (1.0 + rhs.iter().fold(0.0, |a: f64, r| a.max(r.abs())));
     let keys: Vec<Option<[u32; 3]>> = cons
         .iter()
-        .map(|c| c.3.map(|pi| points[pi].key()))
+        .map(|c| match c.3 {
+            Row::Normal(pi) => Some(points[pi].key()),
+            Row::Vertex | Row::Tangent(_) => None,
+        })
         .collect();
     let starts_in: Vec<bool> = (0..m)
         .map(|c| keys[c].is_none_or(|k| memory.starts_in(k, rhs[c])))
@@ -512,36 +254,266 @@ pub(super) fn constrain(
     );
     let mut lambda = vec![0.0; m];
     let mut active = vec![false; m];
+    // Each point with friction starts as it ended the last step (stuck, or sliding the same
+    // way with the same load), a new one stuck if it asks for a push.
+    let unit = |(a, b): (f64, f64)| {
+        let l = a.hypot(b);
+        (l > 0.0).then(|| (a / l, b / l))
+    };
+    let mut grip: Vec<Grip> = (0..points.len())
+        .map(|pi| {
+            let Some((t1, t2)) = tangent_rows[pi] else {
+                return Grip::Off;
+            };
+            let Some((_, mu_d)) = points[pi].cone else {
+                return Grip::Stuck;
+            };
+            match memory.friction.get(&points[pi].key()) {
+                Some(&Remembered::Sliding { direction, load }) => {
+                    match unit((direction.dot(cons[t1].0), direction.dot(cons[t2].0))) {
+                        Some(direction) => Grip::Sliding {
+                            direction,
+                            impulse: mu_d * load,
+                        },
+                        None => Grip::Stuck,
+                    }
+                }
+                Some(Remembered::Stuck) => Grip::Stuck,
+                None if starts_in[normal_row[pi]] => Grip::Stuck,
+                None => Grip::Off,
+            }
+        })
+        .collect();
+    // The velocity change impulses `(row, λ)` give the slots, and its part along row `c`.
+    let slot_velocities = |impulses: &mut dyn Iterator<Item = (usize, f64)>| {
+        let mut at_slots = vec![DVec3::ZERO; h];
+        for (c, l) in impulses {
+            let (d, e, n, _) = &cons[c];
+            for &(k, w) in &e[..*n] {
+                at_slots[k] += *d * (w * l);
+            }
+        }
+        let mut out = vec![DVec3::ZERO; h];
+        for (k, i) in at_slots.iter().enumerate() {
+            if *i != DVec3::ZERO {
+                for (o, p) in out.iter_mut().zip(&p_col[k * h..k * h + h]) {
+                    *o += *i * *p;
+                }
+            }
+        }
+        out
+    };
+    let along = |c: usize, v: &[DVec3]| {
+        if v.is_empty() {
+            return 0.0;
+        }
+        let (d, e, n, _) = &cons[c];
+        e[..*n].iter().map(|&(k, w)| w * d.dot(v[k])).sum::<f64>()
+    };
+    // Where each row sits in a pass's rows (and in the last pass's).
+    let (mut at, mut last_at) = (vec![usize::MAX; m], vec![usize::MAX; m]);
     let mut factor = std::mem::take(&mut memory.scratch.factor);
     for block in &blocks {
-        let mb = block.len();
-        // A is symmetric (P is): the upper triangle is computed and mirrored.
-        let mut a_mat = zeroed(&mut memory.scratch.system, mb, mb);
-        for (i, &ca) in block.iter().enumerate() {
-            for (j, &cb) in block.iter().enumerate().skip(i) {
-                let v = a_entry(&cons[ca], &cons[cb]);
-                a_mat[(i, j)] = v;
-                a_mat[(j, i)] = v;
+        // The points with friction in the block.
+        let frictional: Vec<usize> = block
+            .iter()
+            .filter_map(|&c| match cons[c].3 {
+                Row::Normal(pi) if tangent_rows[pi].is_some() => Some(pi),
+                _ => None,
+            })
+            .collect();
+        let mut last: Option<(Vec<usize>, nalgebra::DMatrix<f64>)> = None;
+        // Each pass solves the block's rows less the tangent rows of the points not stuck; a
+        // sliding point's tangent impulse is fixed at kinetic friction of its normal impulse.
+        // Then each point takes Coulomb's law on the impulses: one let go loses its friction,
+        // a stuck one whose carrying impulse passes the static limit slides, a sliding one
+        // that the fixed impulse would drive past its holder sticks; again until none
+        // changes.
+        for pass in 0..FRICTION_PASSES {
+            let rows: Vec<usize> = block
+                .iter()
+                .copied()
+                .filter(|&c| match cons[c].3 {
+                    Row::Tangent(pi) => matches!(grip[pi], Grip::Stuck),
+                    _ => true,
+                })
+                .collect();
+            // The sliding points: tangent rows, unit direction and impulse.
+            let sliding: Vec<SlidingPoint> = frictional
+                .iter()
+                .filter_map(|&pi| match (grip[pi], tangent_rows[pi]) {
+                    (Grip::Sliding { direction, impulse }, Some(t)) => {
+                        Some((t, direction, impulse))
+                    }
+                    _ => None,
+                })
+                .collect();
+            let fixed: Vec<(usize, f64)> = sliding
+                .iter()
+                .flat_map(|&((t1, t2), d, l)| [(t1, d.0 * l), (t2, d.1 * l)])
+                .collect();
+            let mb = rows.len();
+            // A is symmetric (P is): the upper triangle is computed and mirrored; entries
+            // between rows of the last pass are copied from its matrix.
+            let mut a_mat = zeroed(&mut memory.scratch.system, mb, mb);
+            if let Some((prev_rows, _)) = &last {
+                last_at.iter_mut().for_each(|p| *p = usize::MAX);
+                for (i, &c) in prev_rows.iter().enumerate() {
+                    last_at[c] = i;
+                }
             }
-            a_mat[(i, i)] += 1e-12 * scale;
-        }
-        let b = nalgebra::DVector::from_fn(mb, |i, _| rhs[block[i]]);
-        let solved = solve_pushing(
-            &a_mat,
-            &b,
-            |i| cons[block[i]].3.is_some(),
-            |i| starts_in[block[i]],
-            tol,
-            &mut factor,
-        );
-        give_back(&mut memory.scratch.system, a_mat);
-        // A block whose solve fails (not finite) gives no impulses; the others stand.
-        if let Some((x, act)) = solved {
-            for (i, &c) in block.iter().enumerate() {
-                lambda[c] = x[i];
-                active[c] = act[i];
+            for (i, &ca) in rows.iter().enumerate() {
+                for (j, &cb) in rows.iter().enumerate().skip(i) {
+                    let v = match &last {
+                        Some((_, prev))
+                            if last_at[ca] != usize::MAX && last_at[cb] != usize::MAX =>
+                        {
+                            prev[(last_at[ca], last_at[cb])]
+                        }
+                        _ => {
+                            a_entry(&cons[ca], &cons[cb]) + if i == j { 1e-12 * scale } else { 0.0 }
+                        }
+                    };
+                    a_mat[(i, j)] = v;
+                    a_mat[(j, i)] = v;
+                }
             }
+            // The sliding points' fixed impulses act on the other rows (through the velocity
+            // change they give the block's vertices).
+            let from_fixed = slot_velocities(&mut fixed.iter().copied());
+            let b =
+                nalgebra::DVector::from_fn(mb, |i, _| rhs[rows[i]] - along(rows[i], &from_fixed));
+            let solved = solve_pushing(
+                &a_mat,
+                &b,
+                |i| matches!(cons[rows[i]].3, Row::Normal(pi) if !points[pi].grasped()),
+                |i| starts_in[rows[i]],
+                tol,
+                &mut factor,
+            );
+            if let Some((_, prev)) = last.take() {
+                give_back(&mut memory.scratch.system, prev);
+            }
+            // A block whose solve fails (not finite) gives no impulses; the others stand.
+            let Some((x, act)) = solved else {
+                give_back(&mut memory.scratch.system, a_mat);
+                break;
+            };
+            for (i, &c) in rows.iter().enumerate() {
+                at[c] = i;
+            }
+            let value = |c: usize| (at[c] != usize::MAX).then(|| (x[at[c]], act[at[c]]));
+            // What row `c` still lacks of its target after the pass (only for sliding points).
+            let after = if frictional
+                .iter()
+                .any(|&pi| matches!(grip[pi], Grip::Sliding { .. }))
+            {
+                slot_velocities(
+                    &mut fixed
+                        .iter()
+                        .copied()
+                        .chain(rows.iter().copied().zip(x.iter().copied())),
+                )
+            } else {
+                Vec::new()
+            };
+            let residual = |c: usize| rhs[c] - along(c, &after);
+            let mut changed = false;
+            for &pi in &frictional {
+                let (Some((t1, t2)), Some((mu_s, mu_d))) = (tangent_rows[pi], points[pi].cone)
+                else {
+                    continue;
+                };
+                // The normal impulse the holder gives over the step: the press's own (given
+                // before the step) and the step's; no friction on a point the step does not
+                // push.
+                let load = match value(normal_row[pi]) {
+                    Some((l, true)) if l > 0.0 => l + points[pi].impulse.max(0.0),
+                    _ => 0.0,
+                };
+                let next = match grip[pi] {
+                    _ if load == 0.0 => Grip::Off,
+                    Grip::Off => Grip::Stuck,
+                    Grip::Stuck => {
+                        let l = (
+                            value(t1).map_or(0.0, |v| v.0),
+                            value(t2).map_or(0.0, |v| v.0),
+                        );
+                        match unit(l) {
+                            Some(direction) if l.0.hypot(l.1) > mu_s * load => Grip::Sliding {
+                                direction,
+                                impulse: mu_d * load,
+                            },
+                            _ => Grip::Stuck,
+                        }
+                    }
+                    Grip::Sliding { direction, .. } => {
+                        let r = (residual(t1), residual(t2));
+                        if r.0 * direction.0 + r.1 * direction.1 < 0.0 {
+                            Grip::Stuck
+                        } else {
+                            Grip::Sliding {
+                                direction,
+                                impulse: mu_d * load,
+                            }
+                        }
+                    }
+                };
+                changed |= match (grip[pi], next) {
+                    (Grip::Sliding { impulse: a, .. }, Grip::Sliding { impulse: b, .. }) => {
+                        (a - b).abs() > FRICTION_TOLERANCE * b
+                    }
+                    (a, b) => std::mem::discriminant(&a) != std::mem::discriminant(&b),
+                };
+                grip[pi] = next;
+            }
+            for &c in &rows {
+                at[c] = usize::MAX;
+            }
+            if !changed || pass + 1 == FRICTION_PASSES {
+                for (i, &c) in rows.iter().enumerate() {
+                    lambda[c] = x[i];
+                    active[c] = act[i];
+                }
+                // Kinetic friction never drives a point past its holder: where the fixed
+                // impulse of a sliding point overshoots (its holder's velocity is behind it
+                // along the impulse), it is cut by what its own compliance says overshot
+                // (after the last pass's loads, or the last step's, kinetic friction could
+                // otherwise push a point the wrong way for a step: energy from nothing).
+                for &((t1, t2), d, l) in &sliding {
+                    let over = residual(t1) * d.0 + residual(t2) * d.1;
+                    let compliance = a_entry(&cons[t1], &cons[t1]);
+                    let l = if over < 0.0 && compliance > 0.0 {
+                        (l + over / compliance).max(0.0)
+                    } else {
+                        l
+                    };
+                    lambda[t1] = d.0 * l;
+                    lambda[t2] = d.1 * l;
+                }
+                give_back(&mut memory.scratch.system, a_mat);
+                break;
+            }
+            last = Some((rows, a_mat));
         }
+        if let Some((_, prev)) = last.take() {
+            give_back(&mut memory.scratch.system, prev);
+        }
+    }
+    memory.friction.clear();
+    for (pi, g) in grip.iter().enumerate() {
+        let (Some((t1, t2)), Some(_)) = (tangent_rows[pi], points[pi].cone) else {
+            continue;
+        };
+        let remembered = match *g {
+            Grip::Off => continue,
+            Grip::Stuck => Remembered::Stuck,
+            Grip::Sliding { direction, .. } => Remembered::Sliding {
+                direction: cons[t1].0 * direction.0 + cons[t2].0 * direction.1,
+                load: lambda[normal_row[pi]].max(0.0) + points[pi].impulse.max(0.0),
+            },
+        };
+        memory.friction.insert(points[pi].key(), remembered);
     }
     memory.scratch.factor = factor;
     give_back(&mut memory.scratch.block, p_hh);
@@ -556,13 +528,63 @@ pub(super) fn constrain(
         }
     }
     let mut impulse = vec![DVec3::ZERO; h];
-    for (c, (d, e, n, point)) in cons.iter().enumerate() {
+    for (c, (d, e, n, row)) in cons.iter().enumerate() {
         for &(k, w) in &e[..*n] {
             impulse[k] += *d * (w * lambda[c]);
         }
-        if let Some(pi) = point {
-            points[*pi].impulse += lambda[c];
+        match *row {
+            Row::Normal(pi) => points[pi].impulse += lambda[c],
+            Row::Tangent(pi) => points[pi].tangent_impulse += *d * lambda[c],
+            Row::Vertex => {}
         }
     }
     filter.add_impulses(&list, &impulse, dv);
 }
+
+/// What a row of the filtered step's constraint solve holds.
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Row {
+    /// A held vertex, along one direction (bilateral).
+    Vertex,
+    /// Point hold `i`'s normal (push-only).
+    Normal(usize),
+    /// One direction of point hold `i`'s tangent plane, while it is carried (bilateral).
+    Tangent(usize),
+}
+
+/// How a point with friction holds to its holder in a pass of the filtered step's solve.
+#[derive(Copy, Clone, Debug)]
+enum Grip {
+    /// Not pushing: no friction.
+    Off,
+    /// Carried by its holder (its tangent rows in the solve).
+    Stuck,
+    /// Sliding: its tangential impulse fixed at `impulse` (kinetic friction of its normal
+    /// impulse) along the unit `direction` in its tangent rows' basis.
+    Sliding { direction: (f64, f64), impulse: f64 },
+}
+
+/// A sliding point in a pass: its tangent rows, the unit direction of its impulse in their
+/// basis, and the impulse.
+type SlidingPoint = ((usize, usize), (f64, f64), f64);
+
+/// How a point with friction ended a step (see [`ActiveMemory`]).
+#[derive(Copy, Clone, Debug)]
+enum Remembered {
+    Stuck,
+    /// Sliding with its tangential impulse along `direction` (unit, world) and that normal
+    /// impulse.
+    Sliding {
+        direction: DVec3,
+        load: f64,
+    },
+}
+
+/// How closely a sliding point's impulse must follow kinetic friction of its normal impulse
+/// before the passes stop (relative).
+const FRICTION_TOLERANCE: f64 = 1e-3;
+
+/// Most solves of a block with friction (each pass fixes the sliding points' impulses at
+/// kinetic friction of the last pass's normal impulses, and finds which points stick and
+/// which slide).
+const FRICTION_PASSES: usize = 2;

@@ -1,0 +1,433 @@
+//! Pressing points of a surface from outside: a tool's vertex inside a triangle (the
+//! paper's eq. 3 situation) or its edge across a surface edge, moved onto the holder and held
+//! there along the contact normal (and, with friction, along the tangent plane) through the
+//! next filtered step's constraint solve ([`super::constraints`]).
+
+use super::active_set::{give_back, solve_pushing, zeroed};
+use super::constraints::PointHold;
+use super::{motion_watch, MassSpringSurface, SurfaceError};
+use crate::math::{Real, Vector};
+use glamx::DVec3;
+
+/// The least weight a pressed point must have on vertices that can move.
+const MIN_MOVABLE_WEIGHT: f64 = 0.25;
+
+/// One point to press (see [`MassSpringSurface::press_points`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PointPress<'a> {
+    /// Up to three `(vertex, weight)` pairs, weights ≥ 0 (normalised to sum to one): the
+    /// surface point `Σ wⱼ xⱼ`.
+    pub vertices: &'a [(u32, Real)],
+    /// The direction the holder pushes the point in (normalised).
+    pub normal: Vector,
+    /// How far to move the point along `normal` now (m).
+    pub depth: Real,
+    /// The point's velocity along `normal` from now on (m/s): the holder's.
+    pub normal_velocity: Real,
+    /// What the holder does along the point's tangent plane (friction).
+    pub tangential: Tangential,
+}
+
+/// What a press's holder does along the pressed point's tangent plane in the next filtered
+/// step (see [`MassSpringSurface::press_points`]). The tangential impulse it gives is
+/// [`MassSpringSurface::point_tangent_impulse`].
+///
+/// # Example
+/// A needle tip pressing 1 cm into the middle of a triangle and moving sideways at 1 cm/s:
+/// with enough friction the point goes along, without it the point stays.
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::surface::meshing::plate;
+///
+/// let moved = |tangential: Tangential| {
+///     let mesh = plate(1.0, 1.0, 4, 4);
+///     let rim = |v: Vector| v.x.abs() > 0.49 || v.z.abs() > 0.49;
+///     let edge: Vec<u32> = (0..mesh.vertices.len() as u32)
+///         .filter(|&i| rim(mesh.vertices[i as usize]))
+///         .collect();
+///     let mut surface = MassSpringSurfaceBuilder::from_mesh(&mesh).pinned(edge).build().unwrap();
+///     let [a, b, c] = *surface
+///         .triangles()
+///         .iter()
+///         .find(|t| t.iter().all(|&v| !surface.is_pinned(v)))
+///         .unwrap();
+///     let point = |s: &MassSpringSurface| (s.position(a) + s.position(b) + s.position(c)) / 3.0;
+///     let start = point(&surface);
+///     let third = 1.0 / 3.0;
+///     let press = PointPress {
+///         vertices: &[(a, third), (b, third), (c, third)],
+///         normal: Vector::new(0.0, -1.0, 0.0),
+///         depth: 0.01,
+///         normal_velocity: 0.0,
+///         tangential,
+///     };
+///     surface.press_points(&[press]).unwrap();
+///     surface.step();
+///     (point(&surface) - start).x / surface.dt()
+/// };
+/// let sideways = Vector::new(0.01, 0.0, 0.0);
+/// let grip = Tangential::Coulomb {
+///     velocity: sideways,
+///     static_coefficient: 1.0,
+///     dynamic_coefficient: 1.0,
+/// };
+/// assert!((moved(grip) - 0.01).abs() < 1e-4);
+/// assert!(moved(Tangential::Free).abs() < 1e-4);
+/// ```
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub enum Tangential {
+    /// Nothing: the point slides along the holder freely (frictionless).
+    #[default]
+    Free,
+    /// Coulomb friction with a holder whose material point at the press moves with `velocity`
+    /// (m/s). Solved with the step's other constraints: the point sticks to the holder (its
+    /// velocity along the tangent plane held at `velocity`'s) while the impulse that takes is
+    /// at most `static_coefficient` times the press's normal impulse; beyond, it slides, and
+    /// the holder's tangential impulse is `dynamic_coefficient` times the normal one, along
+    /// the impulse that would have held it (against its slip). Coefficients ≥ 0, dynamic ≤
+    /// static.
+    Coulomb {
+        /// The holder's velocity at the point (m/s).
+        velocity: Vector,
+        /// `μs`.
+        static_coefficient: Real,
+        /// `μd`.
+        dynamic_coefficient: Real,
+    },
+    /// The holder grasps the point: the press moves it onto the holder (by `depth`, which
+    /// may be negative: pulled) and through the step carries it with this velocity (m/s)
+    /// whatever that takes, pushing or pulling (the press is bilateral).
+    Grasped(Vector),
+}
+
+impl MassSpringSurface {
+    /// Presses one surface point, frictionless: [`MassSpringSurface::press_points`] with one
+    /// press.
+    ///
+    /// # Errors
+    /// As [`MassSpringSurface::press_points`].
+    ///
+    /// # Example
+    /// A needle tip pressing 1 cm into the middle of a triangle of a plate, held there:
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::surface::meshing::plate;
+    ///
+    /// let mesh = plate(1.0, 1.0, 4, 4);
+    /// let rim = |v: Vector| v.x.abs() > 0.49 || v.z.abs() > 0.49;
+    /// let edge: Vec<u32> = (0..mesh.vertices.len() as u32)
+    ///     .filter(|&i| rim(mesh.vertices[i as usize]))
+    ///     .collect();
+    /// let mut surface = MassSpringSurfaceBuilder::from_mesh(&mesh).pinned(edge).build().unwrap();
+    /// // A triangle with no pinned vertex.
+    /// let [a, b, c] = *surface
+    ///     .triangles()
+    ///     .iter()
+    ///     .find(|t| t.iter().all(|&v| !surface.is_pinned(v)))
+    ///     .unwrap();
+    /// let point = |s: &MassSpringSurface| (s.position(a) + s.position(b) + s.position(c)) / 3.0;
+    /// let third = 1.0 / 3.0;
+    /// let down = Vector::new(0.0, -1.0, 0.0);
+    /// let id = surface.press_point(&[(a, third), (b, third), (c, third)], down, 0.01, 0.0);
+    /// let id = id.unwrap().unwrap();
+    /// assert!((point(&surface).y + 0.01).abs() < 1e-6);
+    /// surface.step();
+    /// // Held along the normal: the springs did not pull the point back up.
+    /// assert!((point(&surface).y + 0.01).abs() < 1e-6);
+    /// assert!(surface.point_impulse(id).unwrap() > 0.0);
+    /// ```
+    pub fn press_point(
+        &mut self,
+        vertices: &[(u32, Real)],
+        normal: Vector,
+        depth: Real,
+        normal_velocity: Real,
+    ) -> Result<Option<usize>, SurfaceError> {
+        let press = PointPress {
+            vertices,
+            normal,
+            depth,
+            normal_velocity,
+            tangential: Tangential::Free,
+        };
+        Ok(self.press_points(&[press])?.pop().flatten())
+    }
+
+    /// Presses surface points — a tool's vertex inside a triangle (the paper's eq. 3 situation),
+    /// a tool's edge across a surface edge — each by its `depth` along its `normal`, gives each
+    /// its `normal_velocity`, and holds them there along their normals for the next step, until
+    /// [`MassSpringSurface::release_all`].
+    ///
+    /// The position and velocity changes are the least mass-weighted ones that give every point
+    /// its depth and velocity together (a small dense solve over the points: presses sharing a
+    /// vertex do not undo each other). Pinned and held vertices do not move. In the next
+    /// filtered step each point keeps its normal velocity: its impulse is solved with the vertex
+    /// holds' through the filter's columns at its vertices, and a point whose impulse would pull
+    /// is let go. Along its tangent plane it does what its [`Tangential`] says: slides freely,
+    /// sticks to its holder or slides against kinetic friction (Coulomb's law on the step's
+    /// impulses, solved with the rest: two more rows), or is grasped (held in every direction,
+    /// pulled as well as pushed). A press with a negative `depth` (its
+    /// holder is that far above it), or one the others' pushes already satisfy (pushing one
+    /// point of a triangle moves its neighbours), is not moved and is held as a speculative
+    /// contact: over the next step it may close its gap to the holder, not pass it. Returns each
+    /// press's index
+    /// for [`MassSpringSurface::point_impulse`], or `None` for a press on a held vertex (its
+    /// holder carries the contact there) or with less than a quarter of its weight on free
+    /// vertices (its pinned vertices carry it). The explicit and Baraff-Witkin integrators apply
+    /// the position and velocity changes but do not hold the points during the step.
+    ///
+    /// # Errors
+    /// [`SurfaceError::VertexOutOfRange`]; [`SurfaceError::InvalidPointHold`] for a press with
+    /// no vertex or more than three, a negative or non-finite weight, weights summing to zero, a
+    /// zero or non-finite normal, a non-finite depth, velocity or [`Tangential`]. Nothing is
+    /// pressed then.
+    pub fn press_points(
+        &mut self,
+        presses: &[PointPress<'_>],
+    ) -> Result<Vec<Option<usize>>, SurfaceError> {
+        let mut holds = Vec::with_capacity(presses.len());
+        for p in presses {
+            holds.push(self.point_hold(p)?);
+        }
+        // The movable share of each vertex: 1/m, zero for pinned vertices (presses on held
+        // vertices are not kept, below).
+        let inv_mass = |s: &Self, v: u32| {
+            let v = v as usize;
+            if s.pinned[v] {
+                0.0
+            } else {
+                1.0 / s.mass[v]
+            }
+        };
+        let mut out = Vec::with_capacity(presses.len());
+        let mut kept: Vec<(PointHold, f64, f64)> = Vec::new();
+        for (hold, p) in holds.into_iter().zip(presses) {
+            // The weight on vertices that can move: a point mostly on pinned vertices is
+            // carried by them (moving it would fling its free vertex by depth / weight).
+            let movable: f64 = hold
+                .entries()
+                .filter(|&(v, _)| inv_mass(self, v) > 0.0)
+                .map(|(_, w)| w)
+                .sum();
+            // A point on a held vertex is left to that vertex's holder, which already
+            // carries the contact there.
+            let on_held = hold
+                .entries()
+                .any(|(v, w)| w > 0.0 && self.held[v as usize]);
+            if movable >= MIN_MOVABLE_WEIGHT && !on_held {
+                let velocity: f64 = hold
+                    .entries()
+                    .map(|(v, w)| w * self.vel[v as usize].dot(hold.normal))
+                    .sum();
+                out.push(Some(self.point_holds.len() + kept.len()));
+                kept.push((hold, p.depth as f64, p.normal_velocity as f64 - velocity));
+            } else {
+                out.push(None);
+            }
+        }
+        let m = kept.len();
+        if m == 0 {
+            return Ok(out);
+        }
+        // A = J M⁻¹ Jᵀ over the kept presses; δx = M⁻¹ Jᵀ μ with A μ = depth (likewise for the
+        // velocities).
+        let mut scratch = std::mem::take(&mut self.pushing.scratch);
+        let mut a = zeroed(&mut scratch.system, m, m);
+        // Two presses meet only on the vertices they share: the (vertex, press, weight)
+        // entries sorted by vertex give the nonzero pairs (not all m² of them).
+        let mut on_vertex: Vec<(u32, usize, f64)> = kept
+            .iter()
+            .enumerate()
+            .flat_map(|(i, (h, _, _))| h.entries().map(move |(v, w)| (v, i, w)))
+            .collect();
+        on_vertex.sort_unstable_by_key(|e| (e.0, e.1));
+        for run in on_vertex.chunk_by(|x, y| x.0 == y.0) {
+            let im = inv_mass(self, run[0].0);
+            for &(_, i, wi) in run {
+                for &(_, j, wj) in run {
+                    let nn = kept[i].0.normal.dot(kept[j].0.normal);
+                    a[(i, j)] += nn * wi * wj * im;
+                }
+            }
+        }
+        let scale = (0..m).map(|i| a[(i, i)]).fold(0.0, f64::max);
+        for i in 0..m {
+            a[(i, i)] += 1e-12 * scale;
+        }
+        let solved = solve_presses(&a, &kept, &mut scratch.factor);
+        if let Some(PressImpulses {
+            mu,
+            active,
+            rows,
+            nu,
+        }) = &solved
+        {
+            for (r, &i) in rows.iter().enumerate() {
+                let hold = &mut kept[i].0;
+                // The impulse the press gave: the start of what the hold reports.
+                hold.impulse = nu[r];
+                for (v, w) in hold.entries() {
+                    let share = w * inv_mass(self, v);
+                    self.pos[v as usize] += hold.normal * (share * mu[i]);
+                    motion_watch::note(&mut self.watch, v as usize, self.pos[v as usize]);
+                    self.vel[v as usize] += hold.normal * (share * nu[r]);
+                }
+            }
+            // A press left out is `gap` short of its holder (its own negative depth, or where
+            // the others' pushes put it): it is held as a speculative contact that may close
+            // the gap over the next step, not more.
+            for (i, k) in kept.iter_mut().enumerate() {
+                if active[i] {
+                    continue;
+                }
+                // Row i of the symmetric `a`, read down its column (contiguous, and no
+                // transposed copy of `mu` per press).
+                let gap = (a.column(i).dot(mu) - k.1).max(0.0);
+                let velocity: f64 =
+                    k.0.entries()
+                        .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
+                        .sum();
+                // The holder's velocity, as given, is the current point velocity plus `k.2`.
+                k.0.min_velocity = velocity + k.2 - gap / self.dt;
+            }
+        }
+        give_back(&mut scratch.system, a);
+        self.pushing.scratch = scratch;
+        if solved.is_none() {
+            return Ok(out.iter().map(|_| None).collect());
+        }
+        self.point_holds.extend(kept.into_iter().map(|(h, _, _)| h));
+        Ok(out)
+    }
+
+    /// A press checked and normalised.
+    fn point_hold(&self, p: &PointPress<'_>) -> Result<PointHold, SurfaceError> {
+        let vertices = p.vertices;
+        if vertices.is_empty() || vertices.len() > 3 {
+            return Err(SurfaceError::InvalidPointHold);
+        }
+        for &(v, w) in vertices {
+            self.check_vertex(v)?;
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(SurfaceError::InvalidPointHold);
+            }
+        }
+        let total: f64 = vertices.iter().map(|&(_, w)| w as f64).sum();
+        let n = p.normal.as_dvec3().try_normalize();
+        let (carried, cone, tangential_ok) = match p.tangential {
+            Tangential::Free => (None, None, true),
+            Tangential::Grasped(v) => (Some(v.as_dvec3()), None, v.is_finite()),
+            Tangential::Coulomb {
+                velocity,
+                static_coefficient: s,
+                dynamic_coefficient: d,
+            } => (
+                Some(velocity.as_dvec3()),
+                Some((s as f64, d as f64)),
+                velocity.is_finite() && s.is_finite() && d >= 0.0 && d <= s,
+            ),
+        };
+        let (Some(n), true, true) = (
+            n,
+            total > 0.0 && total.is_finite(),
+            p.depth.is_finite() && p.normal_velocity.is_finite() && tangential_ok,
+        ) else {
+            return Err(SurfaceError::InvalidPointHold);
+        };
+        let mut hold = PointHold {
+            vertices: [0; 3],
+            weights: [0.0; 3],
+            count: vertices.len(),
+            normal: n,
+            impulse: 0.0,
+            min_velocity: p.normal_velocity as f64,
+            carried,
+            cone,
+            tangent_impulse: DVec3::ZERO,
+        };
+        for (k, &(v, w)) in vertices.iter().enumerate() {
+            hold.vertices[k] = v;
+            hold.weights[k] = w as f64 / total;
+        }
+        Ok(hold)
+    }
+
+    /// The impulse (N·s, along its normal; positive when pushing) hold `id` of
+    /// [`MassSpringSurface::press_points`] has given the surface: the press's own velocity
+    /// change, plus the constraint impulse of the filtered step after it (all the momentum the
+    /// holder gave the surface from the press to the end of that step). `None` for no such
+    /// hold.
+    pub fn point_impulse(&self, id: usize) -> Option<Real> {
+        self.point_holds.get(id).map(|h| h.impulse as Real)
+    }
+
+    /// The impulse (N·s, in its tangent plane) the holder of hold `id` of
+    /// [`MassSpringSurface::press_points`] gave the surface along the point's tangent plane
+    /// (friction, [`Tangential`]) in the filtered step after the press; zero for a frictionless
+    /// press, `None` for no such hold.
+    pub fn point_tangent_impulse(&self, id: usize) -> Option<Vector> {
+        self.point_holds
+            .get(id)
+            .map(|h| h.tangent_impulse.as_vec3())
+    }
+
+    /// How many points are held (see [`MassSpringSurface::press_point`]).
+    pub fn num_point_holds(&self) -> usize {
+        self.point_holds.len()
+    }
+}
+
+/// What the presses' solves give (see [`solve_presses`]).
+struct PressImpulses {
+    /// Position impulse per press (zero on those left out).
+    mu: nalgebra::DVector<f64>,
+    /// Which presses push.
+    active: Vec<bool>,
+    /// The pushing presses, and their velocity impulses in that order.
+    rows: Vec<usize>,
+    nu: nalgebra::DVector<f64>,
+}
+
+/// The presses' solves over `a = J M⁻¹ Jᵀ` (`kept`: each press with its depth and the normal
+/// velocity its holder asks for): position impulses, push-only, then, for the presses that
+/// push, velocity impulses that bring them to their holders' normal velocity, again push-only
+/// (a point already leaving its holder faster keeps its velocity). `None` when a solve fails.
+fn solve_presses(
+    a: &nalgebra::DMatrix<f64>,
+    kept: &[(PointHold, f64, f64)],
+    factor: &mut Vec<f64>,
+) -> Option<PressImpulses> {
+    let m = kept.len();
+    // Positions: presses only push; one with a negative depth (a speculative contact short
+    // of its holder) or that the others' pushes satisfy is left out. A grasped point is moved
+    // onto its holder either way.
+    let grasped = |i: usize| kept[i].0.grasped();
+    let depth = nalgebra::DVector::from_fn(m, |i, _| kept[i].1);
+    let tol = 1e-9 * depth.amax();
+    let (mu, active) = solve_pushing(
+        a,
+        &depth,
+        |i| !grasped(i),
+        |i| depth[i] > 0.0 || grasped(i),
+        tol,
+        factor,
+    )?;
+    let rows: Vec<usize> = (0..m).filter(|&i| active[i]).collect();
+    let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| a[(rows[r], rows[c])]);
+    let dv = nalgebra::DVector::from_fn(rows.len(), |r, _| kept[rows[r]].2);
+    let vtol = 1e-9 * (1.0 + dv.amax());
+    let (nu, _) = solve_pushing(
+        &sub,
+        &dv,
+        |r| !grasped(rows[r]),
+        |r| dv[r] > 0.0 || grasped(rows[r]),
+        vtol,
+        factor,
+    )?;
+    Some(PressImpulses {
+        mu,
+        active,
+        rows,
+        nu,
+    })
+}

@@ -1,0 +1,330 @@
+//! Coulomb friction at a point contact (issue 13 item 5, "at every contact"): a cube pressed
+//! corner-first into the middle of a large triangle of a coarse plate touches it at one point
+//! between the triangle's vertices (the paper's eq. 3 situation), held by the filter's
+//! constraint solve. Dragged sideways, the tool carries that point below the static limit and
+//! slides over it beyond, against static solves of the plate's springs written here: the
+//! point `Σ wⱼ xⱼ` displaced by `u` with the rim pinned, each axis on its own (linear
+//! springs), gives the tool `-u / (wᵀ C w)` with `C` the springs' compliance condensed on the
+//! triangle's three vertices.
+
+use crate::common::{dirichlet_solve, edge_laplacian};
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::surface::meshing::{plate, plate_rim};
+
+const CELLS: u32 = 10; // 11 x 11 vertices, 0.1 m apart on a 1 m plate
+const K: f32 = 100.0;
+const MASS: f32 = 0.01;
+/// The cube's half-size.
+const HALF: f32 = 0.04;
+
+struct Scene {
+    world: PhysicsWorld,
+    set: SurfaceSet,
+    soft: SurfaceHandle,
+    body: RigidBodyHandle,
+    tool: ColliderHandle,
+    /// The triangle the corner presses, and its incentre at rest.
+    triangle: [u32; 3],
+    centre: Vector,
+}
+
+/// The body's rotation that points the cube's corner `(-1, -1, -1) HALF` straight down.
+fn corner_down() -> Rotation {
+    Rotation::from_rotation_arc(Vector::new(-1.0, -1.0, -1.0).normalize(), Vector::NEG_Y)
+}
+
+/// A clamped plate on a fixed body, and a kinematic cube whose lowest corner hovers 5 mm over
+/// the incentre of a triangle at the plate's centre.
+fn scene(friction: Friction, substeps: u32) -> Scene {
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
+    let fixed = world.insert_body(RigidBodyBuilder::fixed());
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, CELLS, CELLS))
+        .stiffness(K)
+        .damping((K * MASS).sqrt())
+        .mass(MassDistribution::PerVertex(MASS))
+        .pinned(plate_rim(CELLS, CELLS))
+        .build()
+        .unwrap();
+    // A triangle at the centre with no pinned vertex, on the +x +z side.
+    let (triangle, centre) = surface
+        .triangles()
+        .iter()
+        .filter(|t| t.iter().all(|&v| !surface.is_pinned(v)))
+        .map(|t| {
+            let p = t.map(|v| surface.position(v));
+            let side = |i: usize| (p[(i + 1) % 3] - p[(i + 2) % 3]).length();
+            let incentre =
+                (p[0] * side(0) + p[1] * side(1) + p[2] * side(2)) / (side(0) + side(1) + side(2));
+            (*t, incentre)
+        })
+        .filter(|(_, c)| c.x > 0.0 && c.z > 0.0)
+        .min_by(|a, b| a.1.length().total_cmp(&b.1.length()))
+        .unwrap();
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps,
+        collider: true,
+    };
+    let soft = set.insert(surface, fixed, &mut world, options).unwrap();
+    let body = world.insert_body(
+        RigidBodyBuilder::kinematic_position_based().pose(tip_pose(centre + Vector::Y * 0.005)),
+    );
+    let tool = world.insert_collider(ColliderBuilder::cuboid(HALF, HALF, HALF), Some(body));
+    set.add_tool(tool, &mut world).unwrap();
+    set.set_tool_friction(tool, friction).unwrap();
+    Scene {
+        world,
+        set,
+        soft,
+        body,
+        tool,
+        triangle,
+        centre,
+    }
+}
+
+/// The body's pose that puts the cube's lowest corner at `tip`.
+fn tip_pose(tip: Vector) -> Pose {
+    Pose::from_parts(tip + Vector::Y * (HALF * 3f32.sqrt()), corner_down())
+}
+
+impl Scene {
+    /// Moves the corner to `to` in `steps` linear steps, then holds it for `hold` steps; calls
+    /// `each` after every step.
+    fn drive(&mut self, to: Vector, steps: usize, hold: usize, mut each: impl FnMut(&Self)) {
+        let from = self.tip();
+        for s in 1..=steps + hold {
+            let p = from.lerp(to, (s.min(steps)) as f32 / steps as f32);
+            let pose = tip_pose(p);
+            self.world.bodies[self.body].set_next_kinematic_position(pose);
+            self.set.step(&mut self.world);
+            each(self);
+        }
+    }
+
+    fn tip(&self) -> Vector {
+        self.world.bodies[self.body]
+            .position()
+            .transform_point(Vector::splat(-HALF))
+    }
+
+    fn surface(&self) -> &MassSpringSurface {
+        &self.set.get(self.soft).unwrap().surface
+    }
+
+    /// The triangle's unit normal now, up (toward the tool).
+    fn normal(&self) -> Vector {
+        let p = self.triangle.map(|v| self.surface().position(v));
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+        if n.y < 0.0 {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// The corner's barycentric weights in the triangle now, along its normal.
+    fn weights(&self) -> [f32; 3] {
+        let p = self.triangle.map(|v| self.surface().position(v));
+        let q = self.tip();
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let area = |a: Vector, b: Vector, c: Vector| (b - a).cross(c - a).dot(n);
+        let total = area(p[0], p[1], p[2]);
+        [
+            area(q, p[1], p[2]) / total,
+            area(p[0], q, p[2]) / total,
+            area(p[0], p[1], q) / total,
+        ]
+    }
+
+    /// The displacement of the surface point under the corner.
+    fn point_displacement(&self, w: [f32; 3]) -> Vector {
+        (0..3)
+            .map(|k| self.surface().displacement(self.triangle[k]) * w[k])
+            .sum()
+    }
+
+    /// The static force on the tool of the point of weights `w` displaced by `u`.
+    fn static_force(&self, w: [f32; 3], u: Vector) -> Vector {
+        let mesh = plate(1.0, 1.0, CELLS, CELLS);
+        let n = mesh.vertices.len();
+        let lap = edge_laplacian(&mesh.triangles, n, K as f64);
+        let rim = plate_rim(CELLS, CELLS);
+        let known: Vec<bool> = (0..n as u32)
+            .map(|i| self.triangle.contains(&i) || rim.contains(&i))
+            .collect();
+        // The springs' stiffness condensed on the triangle's vertices.
+        let mut stiffness = nalgebra::Matrix3::<f64>::zeros();
+        for (j, &vj) in self.triangle.iter().enumerate() {
+            let mut x = vec![0.0; n];
+            x[vj as usize] = 1.0;
+            dirichlet_solve(&lap, &known, &mut x);
+            for (i, &vi) in self.triangle.iter().enumerate() {
+                stiffness[(i, j)] = (0..n).map(|l| lap[(vi as usize, l)] * x[l]).sum::<f64>();
+            }
+        }
+        let compliance = stiffness.try_inverse().unwrap();
+        let w = nalgebra::Vector3::new(w[0] as f64, w[1] as f64, w[2] as f64);
+        let effective = 1.0 / w.dot(&(compliance * w));
+        -u * effective as f32
+    }
+}
+
+/// The tool's force split along the triangle's normal (up) and across it.
+fn split(f: Vector, n: Vector) -> (f32, f32) {
+    let normal = f.dot(n);
+    (normal, (f - n * normal).length())
+}
+
+#[test]
+fn below_the_static_limit_the_tool_carries_the_point_it_presses() {
+    // Pressed 1 cm, dragged 5 mm: a tangential load half the normal one, under μs = 0.8.
+    for substeps in [1, 8] {
+        let mut s = scene(Friction::new(0.8, 0.6).unwrap(), substeps);
+        let pressed = s.centre - Vector::Y * 0.01;
+        let dragged = pressed + Vector::X * 0.005;
+        s.drive(pressed, 30, 120, |_| {});
+        s.drive(dragged, 30, 240, |_| {});
+        let r = s.set.tool_reaction(s.tool).unwrap();
+        assert_eq!(r.held_vertices, 0, "{substeps} substeps: {r:?}");
+        assert!(r.pressed_points >= 1, "{substeps} substeps: {r:?}");
+        // The surface point under the corner went where the corner took it.
+        let w = s.weights();
+        let u = s.point_displacement(w);
+        let moved = dragged - s.centre;
+        assert!(
+            (u - moved).length() < 2e-4,
+            "{substeps} substeps: the point moved {u}, the corner {moved}"
+        );
+        // The tool feels the static spring force of that displacement, both components.
+        let expected = s.static_force(w, moved);
+        assert!(
+            (r.force - expected).length() <= 0.05 * expected.length(),
+            "{substeps} substeps: force {} against the static {expected}",
+            r.force
+        );
+        assert!(r.force.x < -0.4 * r.force.y, "pulled back: {}", r.force);
+    }
+}
+
+#[test]
+fn beyond_it_the_tool_slides_over_the_point_against_kinetic_friction() {
+    for (mu_s, mu_d) in [(0.2, 0.2), (0.4, 0.4), (0.3, 0.2)] {
+        let mut s = scene(Friction::new(mu_s, mu_d).unwrap(), 8);
+        let pressed = s.centre - Vector::Y * 0.01;
+        s.drive(pressed, 30, 60, |_| {});
+        // Dragged 15 mm along the triangle (its incircle's radius is 29 mm), slowly: past the
+        // static limit at about μs times the 1 cm press.
+        let end = pressed + Vector::new(0.012, 0.0, -0.009);
+        let mut sliding = Vec::new();
+        s.drive(end, 1200, 0, |s| {
+            let r = s.set.tool_reaction(s.tool).unwrap();
+            let (normal, tangential) = split(r.force, s.normal());
+            sliding.push(tangential / normal);
+        });
+        // The second half of the drag slides: |F_t| = μd F_n across the contact. With μs > μd
+        // it is stick-slip: the point slides a few steps, sticks again when kinetic friction
+        // would drive it past the tool, and is carried until the static limit: μd F_n ≤ |F_t|
+        // ≤ μs F_n, less a dip of a few percent as the point stops on the tool (measured
+        // 0.943 μd).
+        for (k, ratio) in sliding[600..].iter().enumerate() {
+            assert!(
+                *ratio >= 0.9 * mu_d && *ratio <= 1.05 * mu_s,
+                "μ {mu_s}/{mu_d}, step {}: |F_t| / F_n = {ratio}",
+                600 + k
+            );
+        }
+        if mu_s == mu_d {
+            let worst = sliding[600..]
+                .iter()
+                .map(|r| (r - mu_d).abs())
+                .fold(0.0, f32::max);
+            assert!(worst <= 0.05 * mu_d, "μ {mu_d}: off by {worst}");
+        }
+        s.drive(end, 1, 240, |_| {});
+        // At rest the point sits where Coulomb's law let it stop: the static solve at its
+        // displacement balances μd (μs = μd), or lies in [μd, μs] after stick-slip.
+        let w = s.weights();
+        assert!(w.iter().all(|&x| x > 0.1), "inside the triangle: {w:?}");
+        let u = s.point_displacement(w);
+        let f = s.static_force(w, u);
+        let (normal, tangential) = split(f, s.normal());
+        let ratio = tangential / normal;
+        let (lo, hi) = (0.95 * mu_d, 1.05 * mu_s);
+        assert!(
+            ratio >= lo && ratio <= hi,
+            "μ {mu_s}/{mu_d}: rests at |F_t| / F_n = {ratio}"
+        );
+        // The tool feels that force.
+        let r = s.set.tool_reaction(s.tool).unwrap();
+        assert!(
+            (r.force - f).length() <= 0.05 * f.length(),
+            "μ {mu_s}/{mu_d}: {} against the static {f}",
+            r.force
+        );
+    }
+}
+
+#[test]
+fn frictionless_the_point_slides_back_and_the_tool_feels_no_drag() {
+    let mut s = scene(Friction::NONE, 8);
+    let pressed = s.centre - Vector::Y * 0.01;
+    s.drive(pressed, 30, 60, |_| {});
+    s.drive(pressed + Vector::X * 0.01, 60, 240, |_| {});
+    let r = s.set.tool_reaction(s.tool).unwrap();
+    let (normal, tangential) = split(r.force, s.normal());
+    assert!(normal > 0.0);
+    assert!(tangential < 1e-3 * normal, "{}", r.force);
+}
+
+#[test]
+fn a_grasping_tool_lifts_the_point_it_holds_feels_its_pull_and_lets_it_go() {
+    // The corner pressed 1 cm into the triangle's middle (no vertex under the tool), grasped,
+    // lifted 2 cm above the plate and moved 5 mm sideways: the point comes along.
+    for friction in [Friction::NONE, Friction::new(0.3, 0.2).unwrap()] {
+        let mut s = scene(friction, 8);
+        let pressed = s.centre - Vector::Y * 0.01;
+        s.drive(pressed, 30, 60, |_| {});
+        s.set.set_grasp(s.tool, true).unwrap();
+        let lifted = s.centre + Vector::new(0.005, 0.02, 0.0);
+        s.drive(lifted, 60, 240, |_| {});
+        let r = s.set.tool_reaction(s.tool).unwrap();
+        assert_eq!(r.held_vertices, 0, "{friction:?}: {r:?}");
+        // The surface point under the corner is on it (frictionless, the surface slid under
+        // the corner before the grasp: that point is not the triangle's incentre).
+        let w = s.weights();
+        let point: Vector = (0..3)
+            .map(|k| s.surface().position(s.triangle[k]) * w[k])
+            .sum();
+        assert!(
+            (point - s.tip()).length() < 2e-4,
+            "{friction:?}: the point at {point}, the corner at {}",
+            s.tip()
+        );
+        assert!(w.iter().all(|&x| x > 0.1), "inside the triangle: {w:?}");
+        let u = s.point_displacement(w);
+        assert!(
+            (u.y - 0.02).abs() < 2e-4 && u.x > 0.0,
+            "{friction:?}: lifted {u}"
+        );
+        // The tool feels the fold's static spring force: pulled down and back.
+        let expected = s.static_force(w, u);
+        assert!(expected.y < 0.0 && expected.x < 0.0);
+        assert!(
+            (r.force - expected).length() <= 0.05 * expected.length(),
+            "{friction:?}: force {} against the static {expected}",
+            r.force
+        );
+        // Let go: the springs pull the point off the tool and the plate flattens.
+        s.set.set_grasp(s.tool, false).unwrap();
+        s.drive(lifted, 1, 240, |_| {});
+        let r = s.set.tool_reaction(s.tool).unwrap();
+        assert_eq!(r.force, Vector::ZERO, "{friction:?}");
+        let u = s.point_displacement(w);
+        assert!(u.length() < 1e-3, "{friction:?}: not back: {u}");
+    }
+}
