@@ -132,8 +132,6 @@ pub(super) struct Scratch {
     pub(super) system: Vec<f64>,
     /// The filter block's.
     pub(super) block: Vec<f64>,
-    /// The constraint groups' scalars (see `constraints::constrain`).
-    pub(super) block_scalars: Vec<f64>,
 }
 
 /// A zeroed `rows × cols` matrix on `storage` (taken; give it back with [`give_back`]).

@@ -311,36 +311,7 @@ pub(super) fn constrain(
         e[..*n].iter().map(|&(k, w)| w * d.dot(v[k])).sum::<f64>()
     };
     // Where each row sits in a pass's rows (and in the last pass's).
-    let mut at = vec![usize::MAX; m];
-    // Rows on the same weighted vertices form a group (a point's normal and tangent rows, a
-    // vertex's one or three rows); `group_rep` is a row of each.
-    let mut group_of = vec![0; m];
-    let mut group_rep: Vec<usize> = Vec::new();
-    let (mut slot_group, mut point_group) = (vec![usize::MAX; h], vec![usize::MAX; points.len()]);
-    for (c, con) in cons.iter().enumerate() {
-        let g = match con.3 {
-            Row::Vertex => &mut slot_group[con.1[0].0],
-            Row::Normal(pi) | Row::Tangent(pi) => &mut point_group[pi],
-        };
-        if *g == usize::MAX {
-            *g = group_rep.len();
-            group_rep.push(c);
-        }
-        group_of[c] = *g;
-    }
-    let mut group_at = vec![usize::MAX; group_rep.len()];
-    // `wₐᵀ P w_b` for rows `a` and `b`.
-    let entry_scalar = |a: usize, b: usize| {
-        let ((_, ea, na, _), (_, eb, nb, _)) = (&cons[a], &cons[b]);
-        let mut s = 0.0;
-        for &(ka, wa) in &ea[..*na] {
-            let column = &p_col[ka * h..ka * h + h];
-            for &(kb, wb) in &eb[..*nb] {
-                s += wa * wb * column[kb];
-            }
-        }
-        s
-    };
+    let (mut at, mut last_at) = (vec![usize::MAX; m], vec![usize::MAX; m]);
     let mut factor = std::mem::take(&mut memory.scratch.factor);
     for block in &blocks {
         // The points with friction in the block.
@@ -351,26 +322,7 @@ pub(super) fn constrain(
                 _ => None,
             })
             .collect();
-        // The scalars `wₐᵀ P w_b` between the block's groups of rows on the same weighted
-        // vertices (a point's normal and tangent rows, a vertex's rows): A's entry between two
-        // rows is their directions' dot product times it (P acts on each axis alike).
-        let mut groups: Vec<usize> = block.iter().map(|&c| group_of[c]).collect();
-        groups.sort_unstable();
-        groups.dedup();
-        for (i, &g) in groups.iter().enumerate() {
-            group_at[g] = i;
-        }
-        let gb = groups.len();
-        let mut scalars = std::mem::take(&mut memory.scratch.block_scalars);
-        scalars.clear();
-        scalars.resize(gb * gb, 0.0);
-        for (i, &ga) in groups.iter().enumerate() {
-            for (j, &gbb) in groups.iter().enumerate().skip(i) {
-                let v = entry_scalar(group_rep[ga], group_rep[gbb]);
-                scalars[i * gb + j] = v;
-                scalars[j * gb + i] = v;
-            }
-        }
+        let mut last: Option<(Vec<usize>, nalgebra::DMatrix<f64>)> = None;
         // Each pass solves the block's rows less the tangent rows of the points not stuck; a
         // sliding point's tangent impulse is fixed at kinetic friction of its normal impulse.
         // Then each point takes Coulomb's law on the impulses: one let go loses its friction,
@@ -401,18 +353,30 @@ pub(super) fn constrain(
                 .flat_map(|&((t1, t2), d, l)| [(t1, d.0 * l), (t2, d.1 * l)])
                 .collect();
             let mb = rows.len();
-            // A is symmetric (P is): the upper triangle is computed and mirrored, each entry
-            // the rows' directions' dot product times their groups' scalar.
+            // A is symmetric (P is): the upper triangle is computed and mirrored; entries
+            // between rows of the last pass are copied from its matrix.
             let mut a_mat = zeroed(&mut memory.scratch.system, mb, mb);
+            if let Some((prev_rows, _)) = &last {
+                last_at.iter_mut().for_each(|p| *p = usize::MAX);
+                for (i, &c) in prev_rows.iter().enumerate() {
+                    last_at[c] = i;
+                }
+            }
             for (i, &ca) in rows.iter().enumerate() {
-                let (da, ga) = (cons[ca].0, group_at[group_of[ca]]);
-                let column = &scalars[ga * gb..ga * gb + gb];
                 for (j, &cb) in rows.iter().enumerate().skip(i) {
-                    let v = da.dot(cons[cb].0) * column[group_at[group_of[cb]]];
+                    let v = match &last {
+                        Some((_, prev))
+                            if last_at[ca] != usize::MAX && last_at[cb] != usize::MAX =>
+                        {
+                            prev[(last_at[ca], last_at[cb])]
+                        }
+                        _ => {
+                            a_entry(&cons[ca], &cons[cb]) + if i == j { 1e-12 * scale } else { 0.0 }
+                        }
+                    };
                     a_mat[(i, j)] = v;
                     a_mat[(j, i)] = v;
                 }
-                a_mat[(i, i)] += 1e-12 * scale;
             }
             // The sliding points' fixed impulses act on the other rows (through the velocity
             // change they give the block's vertices).
@@ -427,9 +391,12 @@ pub(super) fn constrain(
                 tol,
                 &mut factor,
             );
-            give_back(&mut memory.scratch.system, a_mat);
+            if let Some((_, prev)) = last.take() {
+                give_back(&mut memory.scratch.system, prev);
+            }
             // A block whose solve fails (not finite) gives no impulses; the others stand.
             let Some((x, act)) = solved else {
+                give_back(&mut memory.scratch.system, a_mat);
                 break;
             };
             for (i, &c) in rows.iter().enumerate() {
@@ -500,8 +467,10 @@ pub(super) fn constrain(
                 };
                 grip[pi] = next;
             }
-            let done = !changed || pass + 1 == FRICTION_PASSES;
-            if done {
+            for &c in &rows {
+                at[c] = usize::MAX;
+            }
+            if !changed || pass + 1 == FRICTION_PASSES {
                 for (i, &c) in rows.iter().enumerate() {
                     lambda[c] = x[i];
                     active[c] = act[i];
@@ -522,15 +491,14 @@ pub(super) fn constrain(
                     lambda[t1] = d.0 * l;
                     lambda[t2] = d.1 * l;
                 }
-            }
-            for &c in &rows {
-                at[c] = usize::MAX;
-            }
-            if done {
+                give_back(&mut memory.scratch.system, a_mat);
                 break;
             }
+            last = Some((rows, a_mat));
         }
-        memory.scratch.block_scalars = scalars;
+        if let Some((_, prev)) = last.take() {
+            give_back(&mut memory.scratch.system, prev);
+        }
     }
     memory.friction.clear();
     for (pi, g) in grip.iter().enumerate() {
