@@ -190,7 +190,11 @@ impl SurfaceSet {
     /// surface pushes or pulls it (a bilateral contact): lifting the tool lifts a fold of the
     /// surface, and the tool's reaction includes the springs' pull. Let go, the vertices the
     /// springs pull off the tool are released at the next substep. A kinematic tool (or one with
-    /// no body) carries what it grasps; a dynamic tool is not chased by the vertices.
+    /// no body) carries what it grasps; a dynamic tool is not chased by the vertices. A
+    /// polyhedral tool also grasps the points it presses between the surface's vertices (a
+    /// corner in a triangle, an edge across an edge): each is held, in every direction, on the
+    /// tool's material point it touched until the tool lets go (one grasped point per set of
+    /// surface vertices: two on the same vertices would fight).
     ///
     /// # Example
     /// A ball pressed 1 cm into a clamped plate, made to grasp, and lifted 3 cm: it pulls the
