@@ -115,11 +115,7 @@ pub(super) fn surface_substep(
             .parent()
             .and_then(|b| world.bodies.get(b))
             .is_none_or(|b| !b.is_dynamic());
-        let friction = s
-            .pair_friction
-            .get(&t.handle)
-            .copied()
-            .unwrap_or(t.friction);
+        let friction = friction_on(s, t);
         let shape = t.shape.query.as_deref().unwrap_or(tool.shape());
         let pose = inv * t.end;
         // Candidates, from one walk of the BVH: the vertices near the tool, those held
@@ -188,11 +184,7 @@ pub(super) fn surface_substep(
         s.contacts.clear();
         let (mut velocities, mut owners, mut kept) = (Vec::new(), Vec::new(), Vec::new());
         for (k, t) in tools.iter().enumerate() {
-            let friction = s
-                .pair_friction
-                .get(&t.handle)
-                .copied()
-                .unwrap_or(t.friction);
+            let friction = friction_on(s, t);
             for (local, mesh) in &t.shape.parts {
                 find_contacts(
                     s.surface.triangles(),
@@ -311,6 +303,14 @@ fn retarget_holds(
         };
         let _ = surface.set_state(i, p, v);
     }
+}
+
+/// The friction of tool `t` on surface `s`: the pair's own, or else the tool's.
+fn friction_on(s: &AttachedSurface, t: &ToolMotion) -> Friction {
+    s.pair_friction
+        .get(&t.handle)
+        .copied()
+        .unwrap_or(t.friction)
 }
 
 /// Merges the sorted, duplicate-free `extra` into the sorted, duplicate-free `list`.

@@ -379,8 +379,12 @@ pub(super) fn constrain(
                 }
             }
             // The sliding points' fixed impulses act on the other rows (through the velocity
-            // change they give the block's vertices).
-            let from_fixed = slot_velocities(&mut fixed.iter().copied());
+            // change they give the block's vertices; nothing to compute without them).
+            let from_fixed = if fixed.is_empty() {
+                Vec::new()
+            } else {
+                slot_velocities(&mut fixed.iter().copied())
+            };
             let b =
                 nalgebra::DVector::from_fn(mb, |i, _| rhs[rows[i]] - along(rows[i], &from_fixed));
             let solved = solve_pushing(
@@ -546,7 +550,7 @@ pub(super) fn constrain(
 enum Row {
     /// A held vertex, along one direction (bilateral).
     Vertex,
-    /// Point hold `i`'s normal (push-only).
+    /// Point hold `i`'s normal (push-only, bilateral for a grasped point).
     Normal(usize),
     /// One direction of point hold `i`'s tangent plane, while it is carried (bilateral).
     Tangent(usize),
