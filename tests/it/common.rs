@@ -3,6 +3,7 @@
 use parry3d::query;
 use parry3d::shape::Triangle;
 use rapier_touch::prelude::*;
+use rapier_touch::surface::meshing::{plate, plate_rim};
 
 /// Translates a pose.
 pub fn shifted(p: &Pose, v: Vector) -> Pose {
@@ -70,6 +71,68 @@ pub fn dirichlet_solve(lap: &nalgebra::DMatrix<f64>, known: &[bool], u: &mut [f6
         .expect("a connected mesh with pins is solvable");
     for (r, &i) in free.iter().enumerate() {
         u[i] = x[r];
+    }
+}
+
+/// `G = Wᵀ K⁻¹ W`: how far each of `points` (a point `Σ wⱼ xⱼ` each, `(vertex, weight)`)
+/// moves under a unit load on each, for linear springs (Laplacian `lap`) with the `pinned`
+/// vertices held at zero, per axis. A point displaced by `u` alone takes the load `u / G₀₀`;
+/// weights on pinned vertices carry nothing.
+pub fn point_compliance(
+    lap: &nalgebra::DMatrix<f64>,
+    pinned: &[bool],
+    points: &[&[(usize, f64)]],
+) -> nalgebra::DMatrix<f64> {
+    let free: Vec<usize> = (0..pinned.len()).filter(|&i| !pinned[i]).collect();
+    let mut slot = vec![usize::MAX; pinned.len()];
+    for (s, &i) in free.iter().enumerate() {
+        slot[i] = s;
+    }
+    let kff = nalgebra::DMatrix::from_fn(free.len(), free.len(), |r, c| lap[(free[r], free[c])]);
+    let mut w = nalgebra::DMatrix::<f64>::zeros(free.len(), points.len());
+    for (c, point) in points.iter().enumerate() {
+        for &(i, wt) in point.iter() {
+            if slot[i] != usize::MAX {
+                w[(slot[i], c)] += wt;
+            }
+        }
+    }
+    let kinv_w = kff
+        .lu()
+        .solve(&w)
+        .expect("a connected mesh with pins is solvable");
+    w.transpose() * kinv_w
+}
+
+/// A square plate clamped at its rim: its size (m), edge stiffness (N/m) and mass per vertex
+/// (kg), edge damping `sqrt(k m)`.
+#[derive(Copy, Clone, Debug)]
+pub struct ClampedPlate {
+    pub size: f32,
+    pub k: f32,
+    pub mass: f32,
+}
+
+impl ClampedPlate {
+    /// The surface, `cells` × `cells` cells, its rim pinned.
+    pub fn surface(&self, cells: u32) -> MassSpringSurface {
+        MassSpringSurfaceBuilder::from_mesh(&plate(self.size, self.size, cells, cells))
+            .stiffness(self.k)
+            .damping((self.k * self.mass).sqrt())
+            .mass(MassDistribution::PerVertex(self.mass))
+            .pinned(plate_rim(cells, cells))
+            .build()
+            .unwrap()
+    }
+
+    /// The springs' Laplacian and which vertices are pinned (linear springs: the size does
+    /// not enter the static solve).
+    pub fn statics(&self, cells: u32) -> (nalgebra::DMatrix<f64>, Vec<bool>) {
+        let mesh = plate(1.0, 1.0, cells, cells);
+        let n = mesh.vertices.len();
+        let rim = plate_rim(cells, cells);
+        let pinned = (0..n as u32).map(|i| rim.contains(&i)).collect();
+        (edge_laplacian(&mesh.triangles, n, self.k as f64), pinned)
     }
 }
 

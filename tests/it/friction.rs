@@ -13,23 +13,13 @@
 //! one-vertex static solve; once corners next to a held vertex are pressed, the static solve
 //! must include the face's points.
 
-use crate::common::{dirichlet_solve, edge_laplacian};
+use crate::common::{point_compliance, ClampedPlate as Plate};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::{plate, plate_rim};
 
 const CELLS: u32 = 10; // 11 x 11 vertices, 0.1 m apart on a 1 m plate (unit scale)
 /// The centre vertex, at the origin.
 const CENTRE: u32 = (CELLS / 2) * (CELLS + 1) + CELLS / 2;
-
-/// The plate: its size (m), edge stiffness (N/m) and mass per vertex (kg); edge damping
-/// `sqrt(k m)`.
-#[derive(Copy, Clone, Debug)]
-struct Plate {
-    size: f32,
-    k: f32,
-    mass: f32,
-}
 
 const UNIT: Plate = Plate {
     size: 1.0,
@@ -60,14 +50,8 @@ fn scene_on(plate_of: &Plate, friction: Friction, half: f32, substeps: u32) -> S
         ..Default::default()
     };
     let body = world.insert_body(RigidBodyBuilder::fixed());
-    let Plate { size, k, mass } = *plate_of;
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, CELLS, CELLS))
-        .stiffness(k)
-        .damping((k * mass).sqrt())
-        .mass(MassDistribution::PerVertex(mass))
-        .pinned(plate_rim(CELLS, CELLS))
-        .build()
-        .unwrap();
+    let size = plate_of.size;
+    let surface = plate_of.surface(CELLS);
     let mut set = SurfaceSet::new();
     let options = AttachOptions {
         substeps,
@@ -113,28 +97,17 @@ fn drive(
 }
 
 /// The static spring force on the tool when the centre vertex alone is displaced by `u` (the
-/// rim pinned, the rest in equilibrium): `-(L u)_c` per axis (linear springs).
+/// rim pinned, the rest in equilibrium): `-u / G` with `G` the centre's compliance, per axis
+/// (linear springs).
 fn static_force(u: Vector) -> Vector {
     static_force_on(&UNIT, u)
 }
 
 /// [`static_force`] on any plate (linear springs: the size does not enter).
 fn static_force_on(plate_of: &Plate, u: Vector) -> Vector {
-    let mesh = plate(1.0, 1.0, CELLS, CELLS);
-    let n = mesh.vertices.len();
-    let lap = edge_laplacian(&mesh.triangles, n, plate_of.k as f64);
-    let rim = plate_rim(CELLS, CELLS);
-    let known: Vec<bool> = (0..n as u32)
-        .map(|i| i == CENTRE || rim.contains(&i))
-        .collect();
-    let c = CENTRE as usize;
-    let per_axis = |d: f32| {
-        let mut x = vec![0.0; n];
-        x[c] = d as f64;
-        dirichlet_solve(&lap, &known, &mut x);
-        -(0..n).map(|j| lap[(c, j)] * x[j]).sum::<f64>() as f32
-    };
-    Vector::new(per_axis(u.x), per_axis(u.y), per_axis(u.z))
+    let (lap, pinned) = plate_of.statics(CELLS);
+    let g = point_compliance(&lap, &pinned, &[&[(CENTRE as usize, 1.0)]]);
+    -u / g[(0, 0)] as f32
 }
 
 #[test]

@@ -4,25 +4,15 @@
 //! constraint solve. Dragged sideways, the tool carries that point below the static limit and
 //! slides over it beyond, against static solves of the plate's springs written here: the
 //! point `Σ wⱼ xⱼ` displaced by `u` with the rim pinned, each axis on its own (linear
-//! springs), gives the tool `-u / (wᵀ C w)` with `C` the springs' compliance condensed on the
-//! triangle's three vertices.
+//! springs), gives the tool `-u / (wᵀ K⁻¹ w)` with `K` the free vertices' stiffness.
 
-use crate::common::{dirichlet_solve, edge_laplacian};
+use crate::common::{point_compliance, ClampedPlate as Plate};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::{plate, plate_rim};
 
 const CELLS: u32 = 10; // 11 x 11 vertices, 0.1 m apart on a 1 m plate
 
-/// The plate: its size (m), edge stiffness (N/m) and mass per vertex (kg); edge damping
-/// `sqrt(k m)`. The cube's half-size is 4 % of the plate's size.
-#[derive(Copy, Clone, Debug)]
-struct Plate {
-    size: f32,
-    k: f32,
-    mass: f32,
-}
-
+/// The cube's half-size is 4 % of the plate's size.
 const UNIT: Plate = Plate {
     size: 1.0,
     k: 100.0,
@@ -54,20 +44,14 @@ fn scene(friction: Friction, substeps: u32) -> Scene {
 
 /// [`scene`] on any plate (lengths in proportion).
 fn scene_on(plate_of: Plate, friction: Friction, substeps: u32) -> Scene {
-    let Plate { size, k, mass } = plate_of;
+    let size = plate_of.size;
     let half = 0.04 * size;
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
     };
     let fixed = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, CELLS, CELLS))
-        .stiffness(k)
-        .damping((k * mass).sqrt())
-        .mass(MassDistribution::PerVertex(mass))
-        .pinned(plate_rim(CELLS, CELLS))
-        .build()
-        .unwrap();
+    let surface = plate_of.surface(CELLS);
     // A triangle at the centre with no pinned vertex, on the +x +z side.
     let (triangle, centre) = surface
         .triangles()
@@ -175,27 +159,11 @@ impl Scene {
 
     /// The static force on the tool of the point of weights `w` displaced by `u`.
     fn static_force(&self, w: [f32; 3], u: Vector) -> Vector {
-        // Linear springs: the plate's size does not enter.
-        let mesh = plate(1.0, 1.0, CELLS, CELLS);
-        let n = mesh.vertices.len();
-        let lap = edge_laplacian(&mesh.triangles, n, self.plate.k as f64);
-        let rim = plate_rim(CELLS, CELLS);
-        let known: Vec<bool> = (0..n as u32)
-            .map(|i| self.triangle.contains(&i) || rim.contains(&i))
+        let (lap, pinned) = self.plate.statics(CELLS);
+        let point: Vec<(usize, f64)> = (0..3)
+            .map(|k| (self.triangle[k] as usize, w[k] as f64))
             .collect();
-        // The springs' stiffness condensed on the triangle's vertices.
-        let mut stiffness = nalgebra::Matrix3::<f64>::zeros();
-        for (j, &vj) in self.triangle.iter().enumerate() {
-            let mut x = vec![0.0; n];
-            x[vj as usize] = 1.0;
-            dirichlet_solve(&lap, &known, &mut x);
-            for (i, &vi) in self.triangle.iter().enumerate() {
-                stiffness[(i, j)] = (0..n).map(|l| lap[(vi as usize, l)] * x[l]).sum::<f64>();
-            }
-        }
-        let compliance = stiffness.try_inverse().unwrap();
-        let w = nalgebra::Vector3::new(w[0] as f64, w[1] as f64, w[2] as f64);
-        let effective = 1.0 / w.dot(&(compliance * w));
+        let effective = 1.0 / point_compliance(&lap, &pinned, &[&point])[(0, 0)];
         -u * effective as f32
     }
 }

@@ -5,8 +5,8 @@
 //! A property test repeats it for plates from 0.1 mm to 10 km, turned any way, stiff and soft,
 //! light and heavy, with convex and triangle-mesh tools, anywhere inside a triangle.
 
-use crate::common::edge_laplacian;
 use crate::common::strategies::rotation;
+use crate::common::{edge_laplacian, point_compliance};
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -128,19 +128,10 @@ fn static_force(points: &[(f32, f32)], depth: f64, k: f64) -> f64 {
     let (v, t) = plate_mesh();
     let n = v.len();
     let lap = edge_laplacian(&t, n, k);
-    let free: Vec<usize> = (0..n).filter(|&i| !pinned(i as u32)).collect();
-    let slot = |i: usize| free.iter().position(|&f| f == i);
-    let kff = nalgebra::DMatrix::from_fn(free.len(), free.len(), |r, c| lap[(free[r], free[c])]);
-    let kinv = kff.try_inverse().unwrap();
-    let mut w = nalgebra::DMatrix::<f64>::zeros(free.len(), points.len());
-    for (c, &(x, z)) in points.iter().enumerate() {
-        for (i, wt) in weights_at(x, z) {
-            if let Some(s) = slot(i) {
-                w[(s, c)] += wt;
-            }
-        }
-    }
-    let g = w.transpose() * kinv * &w;
+    let rim: Vec<bool> = (0..n as u32).map(pinned).collect();
+    let weights: Vec<Vec<(usize, f64)>> = points.iter().map(|&(x, z)| weights_at(x, z)).collect();
+    let weights: Vec<&[(usize, f64)]> = weights.iter().map(|w| w.as_slice()).collect();
+    let g = point_compliance(&lap, &rim, &weights);
     let ones = nalgebra::DVector::from_element(points.len(), depth);
     let loads = g.svd(true, true).solve(&ones, 1e-12).unwrap();
     loads.sum()
