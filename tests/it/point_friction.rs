@@ -326,7 +326,7 @@ fn a_grasping_tool_lifts_the_point_it_holds_feels_its_pull_and_lets_it_go() {
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig { cases: 10, ..Default::default() })]
 
-    /// Plates from 1 mm to 100 m across, edges from 1 to 1000 N/m, vertices from 1 g to 100 g,
+    /// Plates from 0.1 mm to 10 km across, edges from 1 to 1000 N/m, vertices from 1 g to 100 g,
     /// μs from 0.3 to 1, 1 or 8 substeps: the corner dragged below the static limit carries
     /// the point and feels the static force; with μs = μd, dragged on, it slides at
     /// |F_t| = μ F_n. (Not below μs = 0.3: the pressed triangle tilts by up to 0.06 rad, which
@@ -335,7 +335,7 @@ proptest::proptest! {
     /// stuck static solve does not apply. A random seed found it.)
     #[test]
     fn point_friction_holds_at_any_scale_stiffness_and_mass(
-        log_size in -3.0f32..2.0, log_k in 0.0f32..3.0, log_mass in -3.0f32..-1.0,
+        log_size in -4.0f32..4.0, log_k in 0.0f32..3.0, log_mass in -3.0f32..-1.0,
         mu in 0.3f32..1.0, eight in proptest::bool::ANY,
     ) {
         let p = Plate { size: 10f32.powf(log_size), k: 10f32.powf(log_k), mass: 10f32.powf(log_mass) };
@@ -345,8 +345,13 @@ proptest::proptest! {
         let mut s = scene_on(p, Friction::new(mu, 0.5 * mu).unwrap(), substeps);
         let pressed = s.centre - Vector::Y * depth;
         let dragged = pressed + Vector::X * (0.5 * mu * depth);
-        s.drive(pressed, 30, 300, |_| {});
-        s.drive(dragged, 30, 300, |_| {});
+        // Slowly, over three periods of a vertex on its springs: the static solve holds only
+        // for a quasi-static drag (a 12 kg plate on 1 N/m springs dragged in half a second
+        // loads the corner with its inertia as much as with its springs, and slips it).
+        let period = std::f32::consts::TAU * (p.mass / p.k).sqrt();
+        let drag_steps = ((3.0 * period * 60.0).ceil() as usize).max(30);
+        s.drive(pressed, drag_steps, 300, |_| {});
+        s.drive(dragged, drag_steps, 300, |_| {});
         let w = s.weights();
         let u = s.point_displacement(w);
         let moved = dragged - s.centre;
