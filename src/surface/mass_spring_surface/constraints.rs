@@ -377,8 +377,13 @@ pub(super) fn constrain(
             // Each row group's P-weighted column, `q = P Σ w eₖ` over its entries (a group's
             // rows load the same weighted vertices: a point's normal and tangent rows, a
             // vertex's axes): an entry is then `(dₐ · d_b) Σ w_b q_a[k_b]`, three reads of `q`
-            // in place of nine of `P` (one column read per entry for the whole group).
-            for &c in &rows {
+            // in place of nine of `P` (one column read per entry for the whole group). A group's
+            // column costs `h` per vertex it loads, so only a block of more than `h / 3` rows
+            // gains: the exact filter's one block (six cubes at 60 Hz: 146 rows on 119
+            // vertices), not the neighbour filter's blocks of a few rows each (one ball at
+            // 1 kHz: its haptic step went from 39 to 54 µs with `q` for every block).
+            let by_group = 3 * mb > h;
+            for &c in rows.iter().filter(|_| by_group) {
                 let g = group(c);
                 if q_at[g] == usize::MAX {
                     q_at[g] = q.len();
@@ -392,7 +397,11 @@ pub(super) fn constrain(
                 }
             }
             for (i, &ca) in rows.iter().enumerate() {
-                let qa = &q[q_at[group(ca)]..q_at[group(ca)] + h];
+                let qa = if by_group {
+                    &q[q_at[group(ca)]..q_at[group(ca)] + h]
+                } else {
+                    &[]
+                };
                 let da = cons[ca].0;
                 let column = &mut a_mat.as_mut_slice()[i * mb..i * mb + mb];
                 for (j, &cb) in rows.iter().enumerate().skip(i) {
@@ -404,8 +413,13 @@ pub(super) fn constrain(
                         }
                         _ => {
                             let (db, eb, nb, _) = &cons[cb];
-                            let s: f64 = eb[..*nb].iter().map(|&(k, w)| w * qa[k]).sum();
-                            da.dot(*db) * s + if i == j { 1e-12 * scale } else { 0.0 }
+                            let entry = if by_group {
+                                let s: f64 = eb[..*nb].iter().map(|&(k, w)| w * qa[k]).sum();
+                                da.dot(*db) * s
+                            } else {
+                                a_entry(&cons[ca], &cons[cb])
+                            };
+                            entry + if i == j { 1e-12 * scale } else { 0.0 }
                         }
                     };
                 }
