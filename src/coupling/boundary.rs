@@ -13,8 +13,10 @@ use parry3d::query::Ray;
 /// part's normal; an oriented triangle mesh, its nearest feature's (pseudo-)normal. Any other shape: a short ray
 /// cast from just outside the point, back toward the shape's centre, hits the boundary next to
 /// the point and returns the exact normal there (parry's feature normals at a boundary point
-/// are unreliable for cylinders and cones, and missing for capsules and round shapes).
-/// Fallbacks: the feature normal, then the direction from the shape's centre.
+/// are unreliable for cylinders and cones, and missing for capsules and round shapes); where
+/// parry's cast finds nothing (its tolerances are absolute: tools under about a centimetre),
+/// the same cast on the shape scaled to a unit size. Fallbacks: the feature normal, then the
+/// direction from the shape's centre.
 pub(super) fn outward_normal(
     shape: &dyn parry3d::shape::Shape,
     local: Vector,
@@ -54,14 +56,31 @@ pub(super) fn outward_normal(
     let aabb = shape.compute_local_aabb();
     let centre = aabb.center();
     let radial = (local - centre).try_normalize().unwrap_or(Vector::Y);
-    let eps = 1e-3 * aabb.extents().max_element() + 10.0 * margin;
-    let ray = Ray::new(local + radial * eps, -radial);
-    if let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, 2.0 * eps, true) {
+    let size = aabb.extents().max_element();
+    let eps = 1e-3 * size + 10.0 * margin;
+    let cast = |shape: &dyn parry3d::shape::Shape, scale: Real| {
+        let ray = Ray::new((local + radial * eps) * scale, -radial);
+        let hit = shape.cast_local_ray_and_get_normal(&ray, 2.0 * eps * scale, true)?;
         let n = hit.normal;
-        if hit.time_of_impact > 0.0 && n.is_finite() && n.dot(radial) > 0.0 {
-            if let Some(n) = n.try_normalize() {
-                return n;
-            }
+        (hit.time_of_impact > 0.0 && n.is_finite() && n.dot(radial) > 0.0)
+            .then(|| n.try_normalize())
+            .flatten()
+    };
+    if let Some(n) = cast(shape, 1.0) {
+        return n;
+    }
+    // parry's ray cast on a support map (a cylinder, a cone) works to absolute tolerances: on
+    // a tool under about a centimetre it finds nothing (a cylinder of 0.3 mm radius: no hit,
+    // and the direction from the centre below, 34° off the bottom face's normal, dragged the
+    // vertex it held backwards against friction). Again on the shape scaled to a unit size
+    // (a uniform scale keeps the normals).
+    if size > 0.0 && size.is_finite() {
+        let scale = 1.0 / size;
+        if let Some(n) = shape
+            .scale_dyn(Vector::splat(scale), 24)
+            .and_then(|unit| cast(unit.as_ref(), scale))
+        {
+            return n;
         }
     }
     let (proj, feature) = shape.project_local_point_and_get_feature(local);
