@@ -1,16 +1,16 @@
 //! Where a surface vertex inside a rigid tool leaves it: the nearest point of the tool's
 //! boundary, the exit along a direction (the vertex's inverse trajectory, eq. 1-2), and the
 //! tool's outward normal there. Convex polyhedra use their face planes (parry's projection
-//! and ray cast from inside a support map are iterative and approximate), cylinders and cones
-//! their exact normals; other shapes use parry's queries.
+//! and ray cast from inside a support map are iterative and approximate), balls, capsules,
+//! cylinders and cones their exact normals; other shapes use parry's queries.
 
 use crate::math::{Pose, Real, Vector};
 use parry3d::query::Ray;
 
 /// The outward normal of `shape` at `local`, a point on its boundary (shape frame).
 ///
-/// A convex polyhedron gives the normal of its nearest face plane; a cylinder or a cone, its
-/// nearest face's, exactly ([`round_normal`]); a compound, its nearest part's normal; an
+/// A convex polyhedron gives the normal of its nearest face plane; a ball, a capsule, a
+/// cylinder or a cone, its exact normal ([`round_normal`]); a compound, its nearest part's normal; an
 /// oriented triangle mesh, its nearest feature's (pseudo-)normal. Any other shape: a short ray
 /// cast from just outside the point, back toward the shape's centre, hits the boundary next to
 /// the point and returns the exact normal there (parry's feature normals at a boundary point
@@ -94,12 +94,26 @@ pub(super) fn outward_normal(
         .unwrap_or(radial)
 }
 
-/// The outward normal of a cylinder or a cone (axis y) at `local`, from the nearest of its
-/// flat face(s) and its side, exactly. parry's ray cast on these support maps returns the
-/// bottom face's normal tilted by about 2e-5 rad at random, which on a flat cylinder sliding
-/// over a plate wandered the vertex sideways by more than its step and turned the kinetic
-/// friction (a 1.6 mm tool: the tangential force swung between 0.6 and 1.0 of μd's).
+/// The outward normal of a ball, a capsule, a cylinder or a cone at `local`, exactly (for the
+/// last two, of the nearest of its flat face(s) and its side). parry's ray cast returns these
+/// normals off by up to 3e-4 rad on a ball, 3e-3 on a capsule, 2e-5 on a cylinder's cap and
+/// 2e-3 on its side, at random: a flat cylinder sliding over a plate wandered its vertex
+/// sideways by more than its step and turned the kinetic friction (a 1.6 mm tool: the
+/// tangential force swung between 0.6 and 1.0 of μd's).
 fn round_normal(shape: &dyn parry3d::shape::Shape, local: Vector) -> Option<Vector> {
+    if shape.as_ball().is_some() {
+        return local.try_normalize();
+    }
+    if let Some(c) = shape.as_capsule() {
+        let (a, b) = (c.segment.a, c.segment.b);
+        let ab = b - a;
+        let t = if ab.length_squared() > 0.0 {
+            ((local - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        return (local - (a + ab * t)).try_normalize();
+    }
     let rho = (local.x * local.x + local.z * local.z).sqrt();
     let radial = if rho > 0.0 {
         Vector::new(local.x / rho, 0.0, local.z / rho)
@@ -218,18 +232,20 @@ pub(super) fn exit_along(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use parry3d::shape::{Cone, Cylinder, Shape};
+    use parry3d::shape::{Ball, Capsule, Cone, Cylinder, Shape};
 
-    /// The exact normals of cylinders and cones against the support function (the boundary
+    /// The exact normals of balls, capsules, cylinders and cones against the support function (the boundary
     /// point is the farthest point of the shape along its normal) and parry's projection (a
     /// point just outside along the normal comes back to it), at points spread over their
     /// faces away from the rims.
     #[test]
-    fn cylinder_and_cone_normals_match_parry_and_the_support_function() {
+    fn round_shape_normals_match_the_support_function_and_parrys_projection() {
         let mut checked = 0;
         for (h, r) in [(0.5f32, 0.3f32), (0.1, 0.6), (2e-4, 1e-4), (300.0, 50.0)] {
             let cylinder = Cylinder::new(h, r);
             let cone = Cone::new(h, r);
+            let ball = Ball::new(r);
+            let capsule = Capsule::new_y(h, r);
             for k in 0..200 {
                 let t = k as f32;
                 let (angle, a, b) = (
@@ -239,7 +255,17 @@ mod tests {
                 );
                 let around = Vector::new(angle.cos(), 0.0, angle.sin());
                 // A cylinder's side and caps; a cone's side (radius r (h - y) / 2h) and base.
-                let points: [(&dyn Shape, Vector); 4] = [
+                let dir = Vector::new(angle.cos() * b, a, angle.sin() * b)
+                    .try_normalize()
+                    .unwrap_or(Vector::Y);
+                let points: [(&dyn Shape, Vector); 6] = [
+                    (&ball, dir * r),
+                    // A capsule's side, or a cap (the sphere around the segment's end).
+                    if k % 2 == 0 {
+                        (&capsule, around * r + Vector::Y * (a * h))
+                    } else {
+                        (&capsule, Vector::Y * (h * dir.y.signum()) + dir * r)
+                    },
                     (&cylinder, around * r + Vector::Y * (a * h)),
                     (
                         &cylinder,
@@ -273,6 +299,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(checked, 3200);
+        assert_eq!(checked, 4800);
     }
 }
