@@ -23,6 +23,7 @@ mod rapier_semantics;
 mod reconstruction_bad_input;
 mod reconstruction_properties;
 mod rigid_motion;
+mod round_tools;
 mod sharp_tools;
 mod spinning_drop;
 mod stress_scenes;
