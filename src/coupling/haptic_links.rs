@@ -2,10 +2,10 @@
 //! servo loop's proxy before the rigid step, and after the surfaces' step the set publishes the
 //! tool's local contact model.
 
-use super::boundary::outward_normal;
 use super::holding::attached_with_pose;
 use super::surface_set::AttachedSurface;
 use super::surface_set::{CouplingError, SurfaceSet};
+use crate::geometry::tool_boundary::outward_normal;
 use crate::haptics::{
     is_smooth, normal_at, outer, positive_part, HeldVertex, PatchVertex, ServoModel, WorldLink,
     MAX_PATCH,

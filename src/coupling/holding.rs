@@ -3,7 +3,6 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
-use super::boundary::{distance_outside, exit_along, nearest_on_boundary, outward_normal};
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{
     add_grasped, find_contacts, part_query, press_all, reaction_of, record_grasped,
@@ -11,6 +10,9 @@ use super::pressing::{
 };
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::{contact_margin, ToolShape};
+use crate::geometry::tool_boundary::{
+    distance_outside, exit_along, nearest_on_boundary, outward_normal,
+};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};

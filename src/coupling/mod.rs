@@ -2,7 +2,6 @@
 //! to rigid bodies, gives them colliders that follow the deformation, lets any number of rigid
 //! tools press into them, and returns each tool's reaction force (two-way for dynamic tools).
 
-mod boundary;
 mod events;
 mod friction;
 mod haptic_links;

@@ -18,6 +18,7 @@ mod shape_cast;
 mod shapes;
 mod surface_bvh;
 mod surface_contact;
+pub(crate) mod tool_boundary;
 mod touch_mesh;
 
 pub use contact::{

@@ -1,6 +1,7 @@
 //! The local contact model a world step hands to a servo loop, and how the servo loop reads it
 //! at device rate.
 
+use crate::geometry::tool_boundary::{distance_outside, nearest_on_boundary};
 use crate::math::{Matrix, Pose, Real, Vector};
 use parry3d::math::MatExt;
 use rapier3d::geometry::SharedShape;
@@ -289,11 +290,14 @@ fn boundary_offset(
     pose: &Pose,
     p: Vector,
 ) -> Option<(Real, Vector)> {
-    let proj = shape.project_point(pose, p, false);
-    let d = proj.point - p;
+    // The coupling's own boundary queries (exact on rounded shapes and inside polyhedra, where
+    // parry's projection is iterative), so the model and the full solution agree on them.
+    let near = nearest_on_boundary(shape, pose, p);
+    let inside = distance_outside(shape, pose, p) <= 0.0;
+    let d = near - p;
     let len = d.length();
     let n = d.try_normalize()?;
-    let (depth, n) = if proj.is_inside { (len, n) } else { (-len, -n) };
+    let (depth, n) = if inside { (len, n) } else { (-len, -n) };
     (len > 0.0 && n.is_finite()).then_some((depth, n))
 }
 

@@ -149,6 +149,16 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
         ),
         case(0.3, 24, 400.0, 0.5, 1, SharedShape::ball(0.03), 0.02, 0.95),
         case(
+            0.3,
+            24,
+            400.0,
+            0.05,
+            4,
+            SharedShape::round_cylinder(0.02, 0.02, 0.01),
+            0.02,
+            0.95,
+        ),
+        case(
             0.5,
             12,
             40.0,

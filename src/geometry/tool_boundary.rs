@@ -19,7 +19,7 @@ use parry3d::query::Ray;
 /// parry's cast finds nothing (its tolerances are absolute: tools under about a centimetre),
 /// the same cast on the shape scaled to a unit size. Fallbacks: the feature normal, then the
 /// direction from the shape's centre.
-pub(super) fn outward_normal(
+pub(crate) fn outward_normal(
     shape: &dyn parry3d::shape::Shape,
     local: Vector,
     margin: Real,
@@ -265,7 +265,7 @@ fn round_exit(shape: &dyn parry3d::shape::Shape, o: Vector, d: Vector) -> Option
 /// The face of `poly` whose plane is nearest above or least below `local`: its outward normal
 /// and the signed distance of `local` to its plane. For a point inside the polyhedron that
 /// face holds the nearest boundary point.
-pub(super) fn closest_face(
+pub(crate) fn closest_face(
     poly: &parry3d::shape::ConvexPolyhedron,
     local: Vector,
 ) -> Option<(Vector, Real)> {
@@ -275,7 +275,7 @@ pub(super) fn closest_face(
 }
 
 /// Each face of `poly` as its outward normal and one of its vertices (shape frame).
-pub(super) fn face_planes(
+pub(crate) fn face_planes(
     poly: &parry3d::shape::ConvexPolyhedron,
 ) -> impl Iterator<Item = (Vector, Vector)> + '_ {
     let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
@@ -291,7 +291,7 @@ pub(super) fn face_planes(
 /// a tool under a few centimetres (`tests/it/grazing_drag.rs`: a 7.6 mm box given as its
 /// convex hull, dragged over a plate it rested in, met 3.3 times its resting press with
 /// GJK's answer, at most 1.7 times with the planes'; the same box as a cuboid, 1.3-1.4).
-pub(super) fn distance_outside(shape: &dyn parry3d::shape::Shape, pose: &Pose, p: Vector) -> Real {
+pub(crate) fn distance_outside(shape: &dyn parry3d::shape::Shape, pose: &Pose, p: Vector) -> Real {
     if let Some((inner, border)) = rounded(shape) {
         let q = project_inner(inner, pose.inverse_transform_point(p), true);
         return if q.is_inside {
@@ -312,7 +312,7 @@ pub(super) fn distance_outside(shape: &dyn parry3d::shape::Shape, pose: &Pose, p
 
 /// The nearest point of the tool's boundary to `p` (world). parry's projection of a point
 /// inside a convex polyhedron is approximate, so there the nearest face plane is used.
-pub(super) fn nearest_on_boundary(
+pub(crate) fn nearest_on_boundary(
     shape: &dyn parry3d::shape::Shape,
     pose: &Pose,
     p: Vector,
@@ -352,7 +352,7 @@ pub(super) fn nearest_on_boundary(
 /// convex polyhedron the nearest exit plane is used (parry's ray cast from inside a support
 /// map is iterative and can stop early); other shapes are cast at a size parry's tolerances
 /// suit.
-pub(super) fn exit_along(
+pub(crate) fn exit_along(
     shape: &dyn parry3d::shape::Shape,
     pose: &Pose,
     p: Vector,
