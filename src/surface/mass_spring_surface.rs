@@ -17,13 +17,15 @@ mod changes;
 mod constraints;
 mod dynamics;
 mod motion_watch;
+mod point_hold;
 mod presses;
 use baraff_witkin::CgScratch;
 use builder::check_spring;
 pub use builder::MassSpringSurfaceBuilder;
-use constraints::{constrain, ActiveMemory, PointHold};
+use constraints::constrain;
 pub use motion_watch::Escaped;
 use motion_watch::MotionWatch;
+use point_hold::{ActiveMemory, PointHold};
 pub use presses::{PointPress, Tangential};
 
 /// Why a surface could not be built or changed. Each variant says how to fix the input.

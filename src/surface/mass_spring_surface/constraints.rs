@@ -4,88 +4,12 @@
 //! weights). Both are solved together through the filter's columns, so the rest of the
 //! surface responds to them as to moving pins.
 
-use super::active_set::{give_back, solve_pushing, zeroed, Scratch};
+use super::active_set::{give_back, solve_pushing, zeroed};
 use super::blocks::independent_blocks;
+use super::point_hold::{ActiveMemory, PointHold, Remembered};
 use super::NOT_FREE;
 use crate::surface::filter::{Filter, FilterKind};
 use glamx::DVec3;
-use parry3d::utils::hashmap::HashMap;
-use parry3d::utils::hashset::HashSet;
-
-/// A point of the surface, `Σ wⱼ xⱼ` over up to three vertices, pressed along a normal by
-/// something outside it (see [`MassSpringSurface::press_point`]).
-#[derive(Copy, Clone, Debug)]
-pub(crate) struct PointHold {
-    pub(super) vertices: [u32; 3],
-    pub(super) weights: [f64; 3],
-    pub(super) count: usize,
-    /// Unit direction the holder pushes the point in.
-    pub(super) normal: DVec3,
-    /// The impulse (N·s, along `normal`) the holder gave: the press's velocity change, plus the
-    /// constraint impulse of the step after it.
-    pub(super) impulse: f64,
-    /// The least velocity along `normal` the point may have after the step: the holder's for
-    /// a point in contact; less by `gap / dt` for a point `gap` short of its holder (it may
-    /// close the gap, not pass the holder).
-    pub(super) min_velocity: f64,
-    /// The velocity the point keeps along its tangent plane through the step while it pushes
-    /// (its holder carries it: static friction), or `None` (it slides freely).
-    pub(super) carried: Option<DVec3>,
-    /// The static and dynamic friction coefficients that bound the carrying impulse (`None`:
-    /// carried whatever it takes, a grasp, with a bilateral normal).
-    pub(super) cone: Option<(f64, f64)>,
-    /// The impulse (N·s, in the tangent plane) the holder gave carrying it.
-    pub(super) tangent_impulse: DVec3,
-}
-
-impl PointHold {
-    /// The hold's key across steps: the surface vertices it loads, sorted.
-    fn key(&self) -> [u32; 3] {
-        let mut v = self.vertices;
-        v[self.count.min(3)..]
-            .iter_mut()
-            .for_each(|x| *x = u32::MAX);
-        v.sort_unstable();
-        v
-    }
-
-    /// Held in every direction, pulled as well as pushed.
-    pub(super) fn grasped(&self) -> bool {
-        self.carried.is_some() && self.cone.is_none()
-    }
-
-    pub(super) fn entries(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
-        self.vertices[..self.count]
-            .iter()
-            .copied()
-            .zip(self.weights[..self.count].iter().copied())
-    }
-}
-
-/// Which push-only rows of the filtered step's constraint solve pushed at its end, by key
-/// ([`PointHold::key`]): the next step's solve starts from them, so a contact that persists
-/// costs fewer active-set passes (six cubes on a plate, about 110 rows of which 40 push: from
-/// 5-10 passes to mostly 2-5; `cargo bench --bench coupled_step` 0.70 → 0.44 ms). A row not
-/// seen last time starts in if it asks for a push.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct ActiveMemory {
-    seen: HashSet<[u32; 3]>,
-    pushing: HashSet<[u32; 3]>,
-    /// How the points with friction ended the step: the next step's solve starts from it.
-    friction: HashMap<[u32; 3], Remembered>,
-    /// The solves' dense storage, reused.
-    pub(super) scratch: Scratch,
-}
-
-impl ActiveMemory {
-    fn starts_in(&self, key: [u32; 3], b: f64) -> bool {
-        if self.seen.contains(&key) {
-            self.pushing.contains(&key)
-        } else {
-            b > 0.0
-        }
-    }
-}
 
 /// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
 /// weighted set of vertices: a sliding vertex hold (its normal, weight 1), a full vertex hold
@@ -365,8 +289,9 @@ pub(super) fn constrain(
                 .flat_map(|&((t1, t2), d, l)| [(t1, d.0 * l), (t2, d.1 * l)])
                 .collect();
             let mb = rows.len();
-            // A is symmetric (P is): the upper triangle is computed and mirrored; entries
-            // between rows of the last pass are copied from its matrix.
+            // A is symmetric (P is): its lower triangle is computed down the columns
+            // (contiguous) and mirrored; entries between rows of the last pass are copied from
+            // its matrix.
             let mut a_mat = zeroed(&mut memory.scratch.system, mb, mb);
             if let Some((prev_rows, _)) = &last {
                 last_at.iter_mut().for_each(|p| *p = usize::MAX);
@@ -424,7 +349,7 @@ pub(super) fn constrain(
                     };
                 }
             }
-            // The upper triangle, mirrored.
+            // The upper triangle, from the lower.
             for i in 0..mb {
                 for j in i + 1..mb {
                     a_mat[(i, j)] = a_mat[(j, i)];
@@ -624,18 +549,6 @@ enum Grip {
 /// A sliding point in a pass: its tangent rows, the unit direction of its impulse in their
 /// basis, and the impulse.
 type SlidingPoint = ((usize, usize), (f64, f64), f64);
-
-/// How a point with friction ended a step (see [`ActiveMemory`]).
-#[derive(Copy, Clone, Debug)]
-enum Remembered {
-    Stuck,
-    /// Sliding with its tangential impulse along `direction` (unit, world) and that normal
-    /// impulse.
-    Sliding {
-        direction: DVec3,
-        load: f64,
-    },
-}
 
 /// How closely a sliding point's impulse must follow kinetic friction of its normal impulse
 /// before the passes stop (relative).

@@ -4,7 +4,7 @@
 //! next filtered step's constraint solve ([`super::constraints`]).
 
 use super::active_set::{give_back, solve_pushing, zeroed};
-use super::constraints::PointHold;
+use super::point_hold::PointHold;
 use super::{motion_watch, MassSpringSurface, SurfaceError};
 use crate::math::{Real, Vector};
 use glamx::DVec3;
