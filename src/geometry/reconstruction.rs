@@ -57,16 +57,16 @@ use parry3d::query::gjk::{self, VoronoiSimplex};
 use parry3d::query::{PointQuery, Ray, RayCast};
 use parry3d::shape::SupportMap;
 use std::cell::Cell;
-use std::collections::HashSet;
-use std::hash::{BuildHasherDefault, Hasher};
 
 mod convex;
 mod events;
 mod primitives;
+mod workspace;
 
 use convex::*;
 use events::*;
 pub(crate) use primitives::{edge_edge, ray_triangle, tri_normal};
+use workspace::Workspace;
 
 /// Why a reconstruction could not run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -175,88 +175,6 @@ impl std::fmt::Debug for Reconstructor {
         f.debug_struct("Reconstructor")
             .field("options", &self.options)
             .finish_non_exhaustive()
-    }
-}
-
-#[derive(Default, Clone)]
-struct Workspace {
-    /// Candidate triangle pairs `(fixed, moving)`, internal numbering.
-    pairs: Vec<(u32, u32)>,
-    events: Vec<Event>,
-    m_pts: Vec<DVec3>,
-    m_pt_stamp: Vec<u32>,
-    v_stamp_m: Vec<u32>,
-    v_stamp_f: Vec<u32>,
-    e_stamp_m: Vec<u32>,
-    e_stamp_f: Vec<u32>,
-    tm_range: Vec<(u32, u32)>,
-    tm_range_stamp: Vec<u32>,
-    counter: u32,
-    /// Convex path: triangles near the witness points, visited triangle pairs, the touches
-    /// found near the witnesses, touching pairs still to grow from, and the last support
-    /// vertices (warm starts).
-    near_f: Vec<u32>,
-    near_m: Vec<u32>,
-    visited: HashSet<u64, BuildHasherDefault<PairHasher>>,
-    near_touches: Vec<(u32, u32, f64)>,
-    grow: Vec<(u32, u32)>,
-    warm: [u32; 2],
-}
-
-/// Hashes a packed triangle pair with one multiplication (the keys are already well spread).
-#[derive(Default)]
-struct PairHasher(u64);
-
-impl Hasher for PairHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(8) ^ b as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        }
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (x ^ (x >> 29)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
-}
-
-impl Workspace {
-    fn prepare(&mut self, f: &TouchMesh, m: &TouchMesh) {
-        fn fit<T: Clone + Default>(v: &mut Vec<T>, n: usize) {
-            if v.len() < n {
-                v.resize(n, T::default());
-            }
-        }
-        fit(&mut self.m_pts, m.num_vertices());
-        fit(&mut self.m_pt_stamp, m.num_vertices());
-        fit(&mut self.v_stamp_m, m.num_vertices());
-        fit(&mut self.v_stamp_f, f.num_vertices());
-        fit(&mut self.e_stamp_m, m.num_edges());
-        fit(&mut self.e_stamp_f, f.num_edges());
-        fit(&mut self.tm_range, m.num_triangles());
-        fit(&mut self.tm_range_stamp, m.num_triangles());
-        self.pairs.clear();
-        self.events.clear();
-    }
-
-    /// A fresh stamp value; stamp arrays are cleared when the counter wraps.
-    fn stamp(&mut self) -> u32 {
-        self.counter = self.counter.wrapping_add(1);
-        if self.counter == 0 {
-            for v in [
-                &mut self.m_pt_stamp,
-                &mut self.v_stamp_m,
-                &mut self.v_stamp_f,
-                &mut self.e_stamp_m,
-                &mut self.e_stamp_f,
-                &mut self.tm_range_stamp,
-            ] {
-                v.iter_mut().for_each(|x| *x = 0);
-            }
-            self.counter = 1;
-        }
-        self.counter
     }
 }
 
