@@ -80,12 +80,12 @@ pub(crate) fn outward_normal(
     if let Some(n) = cast(shape, 1.0) {
         return n;
     }
-    // parry's ray cast on a support map (a cylinder, a cone) works to absolute tolerances: on
-    // a tool under about a centimetre it finds nothing (a cylinder of 0.3 mm radius: no hit,
-    // and the direction from the centre below, 34° off the bottom face's normal, dragged the
-    // vertex it held backwards against friction). Again on the shape scaled to a unit size
-    // (a uniform scale keeps the normals).
-    if size > 0.0 && size.is_finite() {
+    // parry's ray cast on a support map works to absolute tolerances: on a tool under about a
+    // centimetre it finds nothing (a cylinder of 0.3 mm radius, before its exact normals: no
+    // hit, and the direction from the centre below, 34° off the bottom face's normal, dragged
+    // the vertex it held backwards against friction). Again on the shape scaled to a unit size
+    // (a uniform scale keeps the normals; support maps only: scaling a mesh copies it).
+    if shape.as_support_map().is_some() && size > 0.0 && size.is_finite() {
         let scale = 1.0 / size;
         if let Some(n) = shape
             .scale_dyn(Vector::splat(scale), 24)
@@ -377,7 +377,9 @@ pub(crate) fn exit_along(
     // cast scaled to a fifth of a unit (a capsule's exit is then good to 1e-7 of its size).
     let size = shape.compute_local_aabb().extents().max_element();
     let scale = 0.2 / size;
-    if size.is_finite() && size > 0.0 && !(0.05..=2.0).contains(&size) {
+    // Support maps only: scaling a triangle mesh or a compound would copy it at every call.
+    let support_map = shape.as_support_map().is_some();
+    if support_map && size.is_finite() && size > 0.0 && !(0.05..=2.0).contains(&size) {
         if let Some(unit) = shape.scale_dyn(Vector::splat(scale), 24) {
             return unit
                 .cast_local_ray(&Ray::new(local * scale, dl), Real::MAX, false)
