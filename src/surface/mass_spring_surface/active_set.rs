@@ -70,7 +70,9 @@ fn solve_on(
     // passes on six cubes and returned impulses of 10⁸ N.
     let (mut best, mut backup) = (usize::MAX, BACKUP);
     let mut settled = false;
-    for _ in 0..4 * m + 8 {
+    // Solves on the rows kept and spreads the answer over `x` (zero on the rows left out);
+    // `None` when it is not finite.
+    let solve_into = |chol: &mut Cholesky, x: &mut nalgebra::DVector<f64>| {
         let sol = chol.solve(b);
         if !sol.iter().all(|v| v.is_finite()) {
             return None;
@@ -79,6 +81,10 @@ fn solve_on(
         for (&i, v) in chol.kept.iter().zip(&sol) {
             x[i] = *v;
         }
+        Some(sol)
+    };
+    for _ in 0..4 * m + 8 {
+        let sol = solve_into(chol, &mut x)?;
         let floor = -1e-9 * x.amax();
         let pulling: Vec<usize> = chol
             .kept
@@ -140,14 +146,7 @@ fn solve_on(
     }
     if !settled {
         // What the last pass changed is solved for.
-        let sol = chol.solve(b);
-        if !sol.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        x.fill(0.0);
-        for (&i, v) in chol.kept.iter().zip(&sol) {
-            x[i] = *v;
-        }
+        solve_into(chol, &mut x)?;
     }
     Some((x, active))
 }
