@@ -85,11 +85,9 @@ pub(crate) fn outward_normal(
     // hit, and the direction from the centre below, 34° off the bottom face's normal, dragged
     // the vertex it held backwards against friction). Again on the shape scaled to a unit size
     // (a uniform scale keeps the normals; support maps only: scaling a mesh copies it).
-    if shape.as_support_map().is_some() && size > 0.0 && size.is_finite() {
-        let scale = 1.0 / size;
-        if let Some(n) = shape
-            .scale_dyn(Vector::splat(scale), 24)
-            .and_then(|unit| cast(unit.as_ref(), scale))
+    if shape.as_support_map().is_some() {
+        if let Some(n) =
+            scaled(shape, size, 1.0).and_then(|(unit, scale)| cast(unit.as_ref(), scale))
         {
             return n;
         }
@@ -187,16 +185,27 @@ fn project_inner(
 ) -> parry3d::query::PointProjection {
     if inner.as_convex_polyhedron().is_some() {
         let size = inner.compute_local_aabb().extents().max_element();
-        if size.is_finite() && size > 0.0 {
-            let scale = 0.2 / size;
-            if let Some(unit) = inner.scale_dyn(Vector::splat(scale), 0) {
-                let mut p = unit.project_local_point(local * scale, solid);
-                p.point /= scale;
-                return p;
-            }
+        if let Some((unit, scale)) = scaled(inner, size, 0.2) {
+            let mut p = unit.project_local_point(local * scale, solid);
+            p.point /= scale;
+            return p;
         }
     }
     inner.project_local_point(local, solid)
+}
+
+/// `shape` (`size` its largest extent) scaled uniformly to a largest extent of `target`, a
+/// size parry's absolute tolerances suit, and the scale; `None` for no finite size or a shape
+/// parry cannot scale. A uniform scale keeps normals; lengths scale back by dividing.
+fn scaled(
+    shape: &dyn parry3d::shape::Shape,
+    size: Real,
+    target: Real,
+) -> Option<(Box<dyn parry3d::shape::Shape>, Real)> {
+    let scale = (size.is_finite() && size > 0.0).then(|| target / size)?;
+    shape
+        .scale_dyn(Vector::splat(scale), 24)
+        .map(|unit| (unit, scale))
 }
 
 /// How far along the unit `d` the ray from `local` (inside, shape frame) leaves a cylinder or
@@ -265,7 +274,7 @@ fn round_exit(shape: &dyn parry3d::shape::Shape, o: Vector, d: Vector) -> Option
 /// The face of `poly` whose plane is nearest above or least below `local`: its outward normal
 /// and the signed distance of `local` to its plane. For a point inside the polyhedron that
 /// face holds the nearest boundary point.
-pub(crate) fn closest_face(
+fn closest_face(
     poly: &parry3d::shape::ConvexPolyhedron,
     local: Vector,
 ) -> Option<(Vector, Real)> {
@@ -275,7 +284,7 @@ pub(crate) fn closest_face(
 }
 
 /// Each face of `poly` as its outward normal and one of its vertices (shape frame).
-pub(crate) fn face_planes(
+fn face_planes(
     poly: &parry3d::shape::ConvexPolyhedron,
 ) -> impl Iterator<Item = (Vector, Vector)> + '_ {
     let (points, adj) = (poly.points(), poly.vertices_adj_to_face());
@@ -293,11 +302,12 @@ pub(crate) fn face_planes(
 /// GJK's answer, at most 1.7 times with the planes'; the same box as a cuboid, 1.3-1.4).
 pub(crate) fn distance_outside(shape: &dyn parry3d::shape::Shape, pose: &Pose, p: Vector) -> Real {
     if let Some((inner, border)) = rounded(shape) {
-        let q = project_inner(inner, pose.inverse_transform_point(p), true);
+        let local = pose.inverse_transform_point(p);
+        let q = project_inner(inner, local, true);
         return if q.is_inside {
             0.0
         } else {
-            ((pose.inverse_transform_point(p) - q.point).length() - border).max(0.0)
+            ((local - q.point).length() - border).max(0.0)
         };
     }
     let gjk = shape.distance_to_point(pose, p, true);
@@ -317,35 +327,56 @@ pub(crate) fn nearest_on_boundary(
     pose: &Pose,
     p: Vector,
 ) -> Vector {
+    boundary_point(shape, pose, p).0
+}
+
+/// The nearest point of the tool's boundary to `p` (world), and whether `p` is inside the
+/// tool, from one query (as [`distance_outside`] tells, zero inside): a convex polyhedron's
+/// nearest face plane for a point inside, a rounded shape's inner shape plus its border,
+/// parry's projection otherwise.
+pub(crate) fn boundary_point(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+) -> (Vector, bool) {
+    let local = pose.inverse_transform_point(p);
     if let Some(poly) = shape.as_convex_polyhedron() {
-        let local = pose.inverse_transform_point(p);
-        if let Some((n, d)) = closest_face(poly, local) {
-            if d <= 0.0 {
-                return pose.transform_point(local - n * d);
-            }
+        if let Some((q, _)) = face_projection(poly, local) {
+            return (pose.transform_point(q), true);
         }
+        return (shape.project_point(pose, p, false).point, false);
     }
     if let Some((inner, border)) = rounded(shape) {
         // The inner shape's nearest boundary point and the outward direction there, then the
         // border radius along it.
-        let local = pose.inverse_transform_point(p);
         let near = match inner.as_convex_polyhedron() {
-            Some(poly) => closest_face(poly, local)
-                .filter(|(_, d)| *d <= 0.0)
-                .map(|(n, d)| (local - n * d, n)),
+            Some(poly) => face_projection(poly, local).map(|(q, n)| (q, n, true)),
             None => None,
         }
         .or_else(|| {
             let q = project_inner(inner, local, false);
             let d = local - q.point;
             let out = if q.is_inside { -d } else { d };
-            out.try_normalize().map(|n| (q.point, n))
+            out.try_normalize()
+                .map(|n| (q.point, n, q.is_inside || d.length() <= border))
         });
-        if let Some((q, n)) = near {
-            return pose.transform_point(q + n * border);
+        if let Some((q, n, inside)) = near {
+            return (pose.transform_point(q + n * border), inside);
         }
     }
-    shape.project_point(pose, p, false).point
+    let proj = shape.project_point(pose, p, false);
+    (proj.point, proj.is_inside)
+}
+
+/// For `local` inside the convex polyhedron `poly`, the nearest point of its boundary (on the
+/// nearest face plane) and that face's outward normal; `None` outside.
+fn face_projection(
+    poly: &parry3d::shape::ConvexPolyhedron,
+    local: Vector,
+) -> Option<(Vector, Vector)> {
+    closest_face(poly, local)
+        .filter(|(_, d)| *d <= 0.0)
+        .map(|(n, d)| (local - n * d, n))
 }
 
 /// Where the ray from `p` (inside the tool, world) along the unit `d` leaves the tool. For a
@@ -358,8 +389,8 @@ pub(crate) fn exit_along(
     p: Vector,
     d: Vector,
 ) -> Option<Vector> {
+    let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
     if let Some(poly) = shape.as_convex_polyhedron() {
-        let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
         let t = face_planes(poly)
             .filter_map(|(n, v)| {
                 let along = n.dot(dl);
@@ -368,19 +399,16 @@ pub(crate) fn exit_along(
             .min_by(|a, b| a.total_cmp(b))?;
         return Some(p + d * t);
     }
-    let (local, dl) = (pose.inverse_transform_point(p), pose.rotation.inverse() * d);
     if let Some(t) = round_exit(shape, local, dl) {
         return Some(p + d * t);
     }
     // parry's cast from inside a support map works to absolute tolerances: on a cylinder of
     // 0.6 mm radius it finds nothing, on one of 6 m its exit is 10 cm off; other shapes are
     // cast scaled to a fifth of a unit (a capsule's exit is then good to 1e-7 of its size).
-    let size = shape.compute_local_aabb().extents().max_element();
-    let scale = 0.2 / size;
     // Support maps only: scaling a triangle mesh or a compound would copy it at every call.
-    let support_map = shape.as_support_map().is_some();
-    if support_map && size.is_finite() && size > 0.0 && !(0.05..=2.0).contains(&size) {
-        if let Some(unit) = shape.scale_dyn(Vector::splat(scale), 24) {
+    let size = shape.compute_local_aabb().extents().max_element();
+    if shape.as_support_map().is_some() && !(0.05..=2.0).contains(&size) {
+        if let Some((unit, scale)) = scaled(shape, size, 0.2) {
             return unit
                 .cast_local_ray(&Ray::new(local * scale, dl), Real::MAX, false)
                 .map(|t| p + d * (t / scale));

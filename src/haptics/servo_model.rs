@@ -1,7 +1,7 @@
 //! The local contact model a world step hands to a servo loop, and how the servo loop reads it
 //! at device rate.
 
-use crate::geometry::tool_boundary::{distance_outside, nearest_on_boundary};
+use crate::geometry::tool_boundary::boundary_point;
 use crate::math::{Matrix, Pose, Real, Vector};
 use parry3d::math::MatExt;
 use rapier3d::geometry::SharedShape;
@@ -290,10 +290,9 @@ fn boundary_offset(
     pose: &Pose,
     p: Vector,
 ) -> Option<(Real, Vector)> {
-    // The coupling's own boundary queries (exact on rounded shapes and inside polyhedra, where
-    // parry's projection is iterative), so the model and the full solution agree on them.
-    let near = nearest_on_boundary(shape, pose, p);
-    let inside = distance_outside(shape, pose, p) <= 0.0;
+    // The coupling's own boundary query (exact on rounded shapes and inside polyhedra, where
+    // parry's projection is iterative), so the model and the full solution agree on it.
+    let (near, inside) = boundary_point(shape, pose, p);
     let d = near - p;
     let len = d.length();
     let n = d.try_normalize()?;
