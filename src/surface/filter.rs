@@ -11,8 +11,9 @@
 //! where `K = -Lk` and `C = -Lc` are the stiffness and damping graph Laplacians of the edges
 //! (each `N × N`, applied to the three coordinates alike, as the paper "compounds" its 1D
 //! matrix). `S` is symmetric positive definite whenever every mass is positive, so it is
-//! factored once (sparse Cholesky, faer) and each step costs two triangular solves with three
-//! right-hand sides; the dense `W` is never formed (except on request, for analysis).
+//! factored once (sparse Cholesky, faer; solved as `sparse_llt` says) and each step costs two
+//! triangular solves with three right-hand sides; the dense `W` is never formed (except on
+//! request, for analysis).
 //!
 //! The `dt K vⁿ` term is the part of the Taylor expansion `K Δx = K dt (vⁿ + Δv)` known at the
 //! start of the step: the spring force change the current velocity will cause over the step.
@@ -41,11 +42,14 @@
 //!   the momentum change equal the applied impulse (a rank-one correction of the rigid mode
 //!   only; see [`super::MassSpringSurface::step`]), so momentum is conserved at any `s`.
 
+mod sparse_llt;
+
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::matmul::sparse_sparse_matmul;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Par, Side};
 use glamx::DVec3;
+use sparse_llt::{SparseLlt, COLUMN_BATCH};
 
 /// Why a filter could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -209,8 +213,9 @@ impl System {
 /// A precomputed filter: `apply` solves (or approximates) `S Δv = b` without allocating.
 pub(crate) enum Filter {
     Exact {
-        llt: faer::sparse::linalg::solvers::Llt<u32, f64>,
-        rhs: Mat<f64>,
+        llt: Box<SparseLlt>,
+        /// Right-hand sides of [`Filter::add_impulses`]' solve.
+        rhs: Vec<DVec3>,
         /// Columns of `S⁻¹` solved so far (for held vertices), dense.
         columns: std::collections::HashMap<u32, Vec<f64>>,
     },
@@ -225,13 +230,10 @@ impl Filter {
         let s = system.matrix(dt);
         match kind {
             FilterKind::Exact => {
-                let a = s.to_faer()?;
-                let llt = a
-                    .sp_cholesky(Side::Lower)
-                    .map_err(|_| FilterError::NotPositiveDefinite)?;
+                let llt = Box::new(SparseLlt::new(&s.to_faer()?)?);
                 Ok(Filter::Exact {
                     llt,
-                    rhs: Mat::zeros(s.n, 3),
+                    rhs: vec![DVec3::ZERO; s.n],
                     columns: Default::default(),
                 })
             }
@@ -252,16 +254,11 @@ impl Filter {
     /// `out = S⁻¹ b` (exact) or its approximation.
     pub fn apply(&mut self, b: &[DVec3], out: &mut [DVec3]) {
         match self {
-            Filter::Exact { llt, rhs, .. } => {
-                for (i, v) in b.iter().enumerate() {
-                    rhs[(i, 0)] = v.x;
-                    rhs[(i, 1)] = v.y;
-                    rhs[(i, 2)] = v.z;
+            Filter::Exact { llt, .. } => {
+                for (o, v) in out.iter_mut().zip(b) {
+                    *o = *v;
                 }
-                llt.solve_in_place(rhs.as_mut());
-                for (i, o) in out.iter_mut().enumerate() {
-                    *o = DVec3::new(rhs[(i, 0)], rhs[(i, 1)], rhs[(i, 2)]);
-                }
+                llt.solve3(out);
             }
             Filter::Neighbour { p, .. } => p.mul_vec3(b, out),
         }
@@ -275,14 +272,15 @@ impl Filter {
     pub fn add_impulses(&mut self, at: &[u32], impulse: &[DVec3], out: &mut [DVec3]) {
         if let Filter::Exact { llt, rhs, .. } = self {
             if at.len() > SOLVE_PAST_COLUMNS {
-                rhs.fill(0.0);
+                rhs.fill(DVec3::ZERO);
                 for (&j, b) in at.iter().zip(impulse) {
-                    let j = j as usize;
-                    (rhs[(j, 0)], rhs[(j, 1)], rhs[(j, 2)]) = (b.x, b.y, b.z);
+                    if let Some(r) = rhs.get_mut(j as usize) {
+                        *r = *b;
+                    }
                 }
-                llt.solve_in_place(rhs.as_mut());
-                for (i, o) in out.iter_mut().enumerate() {
-                    *o += DVec3::new(rhs[(i, 0)], rhs[(i, 1)], rhs[(i, 2)]);
+                llt.solve3(rhs);
+                for (o, r) in out.iter_mut().zip(rhs.iter()) {
+                    *o += *r;
                 }
                 return;
             }
@@ -316,17 +314,17 @@ impl Filter {
     }
 
     /// Makes sure the exact filter holds columns `js` (sorted or not) of `S⁻¹`: the missing ones
-    /// are solved together, [`COLUMN_BATCH`] right-hand sides per solve (faer's supernodal solve
-    /// works on blocks, so a batch costs far less than as many single solves). The cache keeps
+    /// are solved together, up to [`COLUMN_BATCH`] right-hand sides per pass over the factor
+    /// (a batch costs far less than as many single solves; see `sparse_llt`). The cache keeps
     /// up to [`COLUMN_CACHE_BYTES`] of columns, and never fewer than `js`: when full, columns
     /// outside `js` are dropped first, so a held set larger than the budget is not re-solved
     /// every step (it was, at 100,000 nodes with a few hundred held vertices: seconds per step).
     /// No-op for the neighbour filter.
     pub fn prepare_columns(&mut self, js: &[u32]) {
-        let Filter::Exact { llt, rhs, columns } = self else {
+        let Filter::Exact { llt, columns, .. } = self else {
             return;
         };
-        let n = rhs.nrows();
+        let n = llt.n();
         let mut missing: Vec<u32> = js
             .iter()
             .copied()
@@ -344,14 +342,9 @@ impl Filter {
             columns.retain(|j, _| keep.binary_search(j).is_ok());
         }
         for chunk in missing.chunks(COLUMN_BATCH) {
-            let mut e = Mat::<f64>::zeros(n, chunk.len());
-            for (c, &j) in chunk.iter().enumerate() {
-                e[(j as usize, c)] = 1.0;
-            }
-            llt.solve_in_place(e.as_mut());
-            for (c, &j) in chunk.iter().enumerate() {
-                columns.insert(j, e.col(c).iter().copied().collect());
-            }
+            llt.columns(chunk, |c, col| {
+                columns.insert(chunk[c], col.to_vec());
+            });
         }
     }
 
@@ -390,9 +383,6 @@ const COLUMN_CACHE_BYTES: usize = 32 << 20;
 /// Impulses on more vertices than this are applied by a solve of the exact filter rather than
 /// by its cached columns (see [`Filter::add_impulses`]).
 const SOLVE_PAST_COLUMNS: usize = 16;
-
-/// Columns of `S⁻¹` solved per batch; see [`Filter::prepare_columns`].
-const COLUMN_BATCH: usize = 32;
 
 /// Largest `s` at which a row of the neighbour filter gets the consistency correction.
 const CORRECTION_MAX_S: f64 = 1.0;
