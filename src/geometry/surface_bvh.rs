@@ -215,16 +215,28 @@ impl SurfaceBvh {
         if moved.is_empty() {
             return;
         }
-        // A partial refit walks each changed leaf's path to the root: past a fraction of the
-        // leaves, one rebuild is cheaper.
-        if moved.len() * 8 > self.reference.len() {
-            self.rebuild(now, Some(before));
-            return;
-        }
         for &v in moved {
             if let (Some(r), Some(p)) = (self.reference.get_mut(v as usize), now.get(v as usize)) {
                 *r = *p;
             }
+        }
+        // A partial refit walks each changed leaf's path to the root: past a fraction of the
+        // leaves, one pass over every leaf and node is cheaper. The tree keeps its structure,
+        // as parry's `TriMesh::set_vertices` keeps a deforming mesh's; a binned rebuild here
+        // (what this did before) cost 1.4 ms on a 3,025-vertex plate, a step's worth several
+        // times over, each time the pressed plate's vertices moved past the slack together.
+        // Only the moved vertices take new references, so every other vertex stays within
+        // the slack of its reference, as the caller's motion watch measures it.
+        if moved.len() * 8 > self.reference.len() {
+            for l in 0..self.num_leaves() {
+                let b = self.leaf_box(l, Some(before));
+                self.bvh.insert_or_update_partially(b, l as u32, 0.0);
+            }
+            self.bvh.refit_without_opt();
+            self.generation += 1;
+            self.log_base += self.log.len();
+            self.log.clear();
+            return;
         }
         self.changed.clear();
         for &v in moved {

@@ -113,3 +113,76 @@ proptest! {
         }
     }
 }
+
+/// Most of a surface moving past the slack at once (a plate waving and drifting away, every
+/// vertex further than the slack each substep): the BVH refits every leaf in place instead of
+/// walking each one's path, and still misses nothing a scan finds, asked afresh and through a
+/// drifting tool's cache, including far from where the tree was built.
+#[test]
+fn the_bvh_refit_in_place_after_a_wholesale_move_misses_nothing() {
+    let (size, cells) = (2.0f32, 24u32);
+    let mesh = plate(size, size, cells, cells);
+    let edge = size / cells as f32;
+    let slack = 0.1 * edge;
+    let home = mesh.vertices.clone();
+    let wave = |t: f32| -> Vec<Vector> {
+        home.iter()
+            .map(|p| {
+                let y = 0.3 * size * (3.0 * p.x / size + 2.0 * p.z / size + t).sin();
+                *p + Vector::new(0.4 * t * size, y, 0.0)
+            })
+            .collect()
+    };
+    let mut now = home.clone();
+    let mut bvh = SurfaceBvh::new(&now, &mesh.triangles, slack);
+    let all: Vec<u32> = (0..now.len() as u32).collect();
+    let mut cache = NearCache::default();
+    let (mut tris, mut verts) = (Vec::new(), Vec::new());
+    for step in 1..=30 {
+        let before = std::mem::replace(&mut now, wave(step as f32 * 0.1));
+        // Every vertex moved more than the slack.
+        assert!(now
+            .iter()
+            .zip(&before)
+            .all(|(a, b)| (*a - *b).length() > slack));
+        bvh.update(&all, &now, &before);
+        let snapshot = SurfaceSnapshot {
+            before: &before,
+            now: &now,
+            triangles: &mesh.triangles,
+        };
+        let centre = now[(step * 37) % now.len()];
+        for (k, half) in [0.05f32, 0.2, 0.6].into_iter().enumerate() {
+            let query = Aabb::new(
+                centre - Vector::splat(half * size),
+                centre + Vector::splat(half * size),
+            );
+            if k == 0 {
+                bvh.near_cached(&mut cache, &query, 0.2 * half * size, &mut tris, &mut verts);
+            } else {
+                bvh.triangles_in(&query, &mut tris);
+                bvh.vertices_in(&query, &mut verts);
+                verts.sort_unstable();
+            }
+            let mut found = 0;
+            for t in 0..mesh.triangles.len() as u32 {
+                if snapshot.swept_bounds(t).unwrap().intersects(&query) {
+                    found += 1;
+                    assert!(
+                        tris.binary_search(&t).is_ok(),
+                        "step {step}: triangle {t} missed"
+                    );
+                }
+            }
+            assert!(found > 0, "step {step}: the query meets the surface");
+            for (v, p) in now.iter().enumerate() {
+                if query.contains_local_point(*p) {
+                    assert!(
+                        verts.binary_search(&(v as u32)).is_ok(),
+                        "step {step}: vertex {v} missed"
+                    );
+                }
+            }
+        }
+    }
+}
