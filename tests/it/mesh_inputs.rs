@@ -406,9 +406,98 @@ const ALL_TYPES: [ShapeType; 20] = [
 /// shape goes through EPA for points inside, which is off by up to ~3 % of the border radius.
 fn surface_distance(shape: &dyn Shape, p: Vector) -> Real {
     match round_parts(shape) {
-        Some((inner, b)) => (inner.distance_to_local_point(p, true) - b).abs(),
-        None => (shape.project_local_point(p, false).point - p).length(),
+        Some((inner, b)) => {
+            (hull_distance(inner, p).unwrap_or_else(|| inner.distance_to_local_point(p, true)) - b)
+                .abs()
+        }
+        None => hull_distance(shape, p)
+            .map(Real::abs)
+            .unwrap_or_else(|| (shape.project_local_point(p, false).point - p).length()),
     }
+}
+
+/// For a convex polyhedron, the signed distance (negative inside) from `p` to the boundary of
+/// the hull of its points, which is what parry's support map (and so its collision detection)
+/// takes as the shape: by brute force, from every triple of points whose plane has no point
+/// above it, in `f64`, each triangle projected exactly. parry's own point query there is an
+/// iterative GJK: it read a point of the cloud, on the hull, 4.9e-5 outside a 1.9 m hull
+/// (`PROPTEST_RNG_SEED=777`).
+fn hull_distance(shape: &dyn Shape, p: Vector) -> Option<Real> {
+    let pts: Vec<glamx::DVec3> = shape
+        .as_convex_polyhedron()?
+        .points()
+        .iter()
+        .map(|v| v.as_dvec3())
+        .collect();
+    let q = p.as_dvec3();
+    let scale = pts
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs().max_element()))
+        .max(1e-30);
+    let (mut best, mut outside) = (f64::INFINITY, false);
+    let n = pts.len();
+    for i in 0..n {
+        for j in i + 1..n {
+            for k in j + 1..n {
+                let (a, b, c) = (pts[i], pts[j], pts[k]);
+                let Some(nrm) = (b - a).cross(c - a).try_normalize() else {
+                    continue;
+                };
+                let heights = pts.iter().map(|v| nrm.dot(*v - a));
+                let (lo, hi) = heights.fold((0.0f64, 0.0f64), |(l, h), x| (l.min(x), h.max(x)));
+                let on = 1e-9 * scale;
+                // A supporting plane: every point on one side.
+                let nrm = if hi <= on {
+                    nrm
+                } else if lo >= -on {
+                    -nrm
+                } else {
+                    continue;
+                };
+                outside |= nrm.dot(q - a) > on;
+                best = best.min(triangle_distance(q, a, b, c));
+            }
+        }
+    }
+    best.is_finite()
+        .then(|| (if outside { best } else { -best }) as Real)
+}
+
+/// The distance from `q` to the triangle `abc` (Ericson's closest-point regions).
+fn triangle_distance(q: glamx::DVec3, a: glamx::DVec3, b: glamx::DVec3, c: glamx::DVec3) -> f64 {
+    let (ab, ac, ap) = (b - a, c - a, q - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (q - a).length();
+    }
+    let bp = q - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (q - b).length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (q - (a + ab * v)).length();
+    }
+    let cp = q - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (q - c).length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (q - (a + ac * w)).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (q - (b + (c - b) * w)).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (q - (a + ab * v + ac * w)).length()
 }
 
 /// The inner shape and the border radius of a round shape.
