@@ -69,15 +69,15 @@ impl Reconstructor {
         // exact events: 5.3 mm past it on a 2.4 m pair of icospheres met head-on
         // (`PROPTEST_RNG_SEED=100` in `tests/it/reconstruction_properties.rs`), where the events
         // then found a touch 4.4 mm short of the first one. Walked back a little past the touch
-        // found, the pair must be apart by GJK; otherwise the general search decides. The step
-        // is GJK's tolerance seen along the path, at least a quarter of the window (at 1e-5 of
-        // the scale GJK read a separated face-to-face pair as intersecting) and at most the
-        // window: a first touch missed by more than the step goes to the general search, one
-        // missed by less is not caught here. Cost: one GJK query, 8.1 -> 9.6 us and 11.6 ->
-        // 13.4 us on the `reconstruction` bench's two balls.
+        // found, the pair must be apart (along the cast's normal, or else by the reconstruction's
+        // own penetration test); otherwise the general search decides. The step is GJK's tolerance seen along the path, at least a
+        // quarter of the window and at most the window: a first touch missed by more than the
+        // step goes to the general search, one missed by less is not caught here.
         let cos = (n.dot(fr.u.as_vec3()).abs() as f64).max(1e-3);
         let step = (4.0 * gjk::eps_tol() as f64 * scale / cos).clamp(0.25 * window, window);
-        if self.convex_overlapping(fixed, moving, fr, -(b + step) * fr.u) != Some(false) {
+        if !apart_along(fixed, moving, fr, -(b + step) * fr.u, n.as_dvec3())
+            && self.penetrating_at(fixed, moving, fr, b + step)
+        {
             return None;
         }
         if deep {
@@ -116,30 +116,6 @@ impl Reconstructor {
         let (t, w1, w2) = (t as f64 * scale, w1 * scale as Real, w2);
         (t.is_finite() && t > 0.0 && w1.is_finite() && w2.is_finite() && n.is_finite())
             .then(|| (t, w1, pos12.inverse_transform_point(w2) * scale as Real, n))
-    }
-
-    /// Whether the two convex meshes, the moving one shifted by `shift`, intersect by GJK (on
-    /// the pair's scaled coordinates, see [`Reconstructor::convex_cast`]); `None` if GJK does
-    /// not decide. A separated face-to-face pair can read as intersecting (GJK gives up after
-    /// its perturbations): the caller then takes the exact general search.
-    fn convex_overlapping(
-        &mut self,
-        fixed: &TouchMesh,
-        moving: &TouchMesh,
-        fr: &Frame,
-        shift: DVec3,
-    ) -> Option<bool> {
-        let (_, pos12, g1, g2) = self.scaled_pair(fixed, moving, fr, shift);
-        let dir = pos12.translation.try_normalize().unwrap_or(Vector::X);
-        let mut simplex = VoronoiSimplex::new();
-        simplex.reset(gjk::CsoPoint::from_shapes(&pos12, &g1, &g2, dir));
-        let answer = match gjk::closest_points(&pos12, &g1, &g2, 0.0, false, &mut simplex) {
-            gjk::GJKResult::Intersection => Some(true),
-            gjk::GJKResult::NoIntersection(_) => Some(false),
-            _ => None,
-        };
-        self.ws.warm = [g1.warm.get(), g2.warm.get()];
-        answer
     }
 
     /// Exact events of the convex path: every touch within `window` of the GJK estimate `s_g`
@@ -290,6 +266,24 @@ impl Reconstructor {
         self.ws.warm = [g1.warm.get(), g2.warm.get()];
         answer
     }
+}
+
+/// Whether the two convex meshes, the moving one shifted by `shift` (fixed frame), are apart
+/// along `n` or `-n` (fixed frame), from one support vertex of each, exactly: a separating axis.
+/// The cheap half of the convex path's check of its first touch.
+fn apart_along(fixed: &TouchMesh, moving: &TouchMesh, fr: &Frame, shift: DVec3, n: DVec3) -> bool {
+    let Some(n) = n.try_normalize() else {
+        return false;
+    };
+    [n, -n].into_iter().any(|a| {
+        let top = fixed
+            .convex_support(a.as_vec3(), 0)
+            .map(|i| a.dot(fixed.vertices()[i as usize].as_dvec3()));
+        let bottom = moving
+            .convex_support((fr.rot.inverse() * -a).as_vec3(), 0)
+            .map(|i| a.dot(fr.moving_point(moving.vertices()[i as usize]) + shift));
+        matches!((top, bottom), (Some(t), Some(b)) if b > t)
+    })
 }
 
 /// The vertex of `mesh` farthest along `dir` (mesh frame) reached by hill climbing over the
