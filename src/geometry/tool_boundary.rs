@@ -156,7 +156,9 @@ fn round_normal(shape: &dyn parry3d::shape::Shape, local: Vector) -> Option<Vect
 /// inner shape, so its normals, nearest points and distances follow from the inner shape's
 /// exact queries. parry answers them on the rounded shape as a support map (iterative): a
 /// rounded cylinder held still in a plate read forces swinging by 28 % from step to step.
-fn rounded(shape: &dyn parry3d::shape::Shape) -> Option<(&dyn parry3d::shape::Shape, Real)> {
+pub(crate) fn rounded(
+    shape: &dyn parry3d::shape::Shape,
+) -> Option<(&dyn parry3d::shape::Shape, Real)> {
     if let Some(r) = shape.as_round_cuboid() {
         return Some((&r.inner_shape, r.border_radius));
     }
