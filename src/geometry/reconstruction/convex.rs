@@ -69,10 +69,11 @@ impl Reconstructor {
         // exact events: 5.3 mm past it on a 2.4 m pair of icospheres met head-on
         // (`PROPTEST_RNG_SEED=100` in `tests/it/reconstruction_properties.rs`), where the events
         // then found a touch 4.4 mm short of the first one. Walked back a little past the touch
-        // found, the pair must be apart (along the cast's normal, or else by the reconstruction's
-        // own penetration test); otherwise the general search decides. The step is GJK's tolerance seen along the path, at least a
-        // quarter of the window and at most the window: a first touch missed by more than the
-        // step goes to the general search, one missed by less is not caught here.
+        // found, the pair must be apart (along the cast's normal, or else by the
+        // reconstruction's own penetration test); otherwise the general search decides. The
+        // step is GJK's tolerance seen along the path, at least a quarter of the window and at
+        // most the window: a first touch missed by more than the step goes to the general
+        // search, one missed by less is not caught here.
         let cos = (n.dot(fr.u.as_vec3()).abs() as f64).max(1e-3);
         let step = (4.0 * gjk::eps_tol() as f64 * scale / cos).clamp(0.25 * window, window);
         if !apart_along(fixed, moving, fr, -(b + step) * fr.u, n.as_dvec3())
