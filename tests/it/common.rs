@@ -6,6 +6,21 @@ use rapier_touch::prelude::*;
 use rapier_touch::surface::meshing::{plate, plate_rim};
 
 /// Translates a pose.
+/// The inner shape and the border radius of a round shape.
+pub fn round_parts(
+    shape: &dyn parry3d::shape::Shape,
+) -> Option<(&dyn parry3d::shape::Shape, Real)> {
+    use parry3d::shape::TypedShape;
+    match shape.as_typed_shape() {
+        TypedShape::RoundCuboid(r) => Some((&r.inner_shape, r.border_radius)),
+        TypedShape::RoundTriangle(r) => Some((&r.inner_shape, r.border_radius)),
+        TypedShape::RoundCylinder(r) => Some((&r.inner_shape, r.border_radius)),
+        TypedShape::RoundCone(r) => Some((&r.inner_shape, r.border_radius)),
+        TypedShape::RoundConvexPolyhedron(r) => Some((&r.inner_shape, r.border_radius)),
+        _ => None,
+    }
+}
+
 pub fn shifted(p: &Pose, v: Vector) -> Pose {
     Pose::from_parts(p.translation + v, p.rotation)
 }

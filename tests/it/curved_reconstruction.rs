@@ -3,6 +3,7 @@
 //! against an analytic first touch: every curved shape rapier has, turning and translating, at
 //! scales from 1e-4 to 1e4.
 
+use crate::common::round_parts;
 use parry3d::query;
 use parry3d::shape::{Ball, Cuboid, SharedShape};
 use proptest::prelude::*;
@@ -50,18 +51,7 @@ fn signed_distance(
     b: &dyn parry3d::shape::Shape,
     pb: &Pose,
 ) -> Real {
-    let (inner, border) = match b.as_typed_shape() {
-        parry3d::shape::TypedShape::RoundCuboid(r) => (
-            &r.inner_shape as &dyn parry3d::shape::Shape,
-            r.border_radius,
-        ),
-        parry3d::shape::TypedShape::RoundCylinder(r) => (&r.inner_shape as _, r.border_radius),
-        parry3d::shape::TypedShape::RoundCone(r) => (&r.inner_shape as _, r.border_radius),
-        parry3d::shape::TypedShape::RoundConvexPolyhedron(r) => {
-            (&r.inner_shape as _, r.border_radius)
-        }
-        _ => (b, 0.0),
-    };
+    let (inner, border) = round_parts(b).unwrap_or((b, 0.0));
     let d = query::distance(pa, a, pb, inner).unwrap().distance;
     let d = if d > 0.0 {
         d

@@ -14,9 +14,11 @@
 //! References are parry's point queries and support maps and the input points themselves,
 //! never the crate's own output.
 
+use crate::common::round_parts;
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::IVector;
-use parry3d::shape::{Shape, ShapeType, SharedShape, TypedShape};
+use parry3d::query::PointQuery;
+use parry3d::shape::{Shape, ShapeType, SharedShape, Triangle};
 use parry3d::utils::Array2;
 use proptest::prelude::*;
 use rapier_touch::geometry::generators::MeshBuffers;
@@ -419,7 +421,8 @@ fn surface_distance(shape: &dyn Shape, p: Vector) -> Real {
 /// For a convex polyhedron, the signed distance (negative inside) from `p` to the boundary of
 /// the hull of its points, which is what parry's support map (and so its collision detection)
 /// takes as the shape: by brute force, from every triple of points whose plane has no point
-/// above it, in `f64`, each triangle projected exactly. parry's own point query there is an
+/// above it, in `f64`, each such triangle projected exactly (parry's triangle projection, by
+/// its Voronoi regions). parry's own point query on the polyhedron is an
 /// iterative GJK: it read a point of the cloud, on the hull, 4.9e-5 outside a 1.9 m hull
 /// (`PROPTEST_RNG_SEED=777`).
 fn hull_distance(shape: &dyn Shape, p: Vector) -> Option<Real> {
@@ -455,61 +458,13 @@ fn hull_distance(shape: &dyn Shape, p: Vector) -> Option<Real> {
                     continue;
                 };
                 outside |= nrm.dot(q - a) > on;
-                best = best.min(triangle_distance(q, a, b, c));
+                let triangle = Triangle::new(a.as_vec3(), b.as_vec3(), c.as_vec3());
+                best = best.min(triangle.distance_to_local_point(p, false) as f64);
             }
         }
     }
     best.is_finite()
         .then(|| (if outside { best } else { -best }) as Real)
-}
-
-/// The distance from `q` to the triangle `abc` (Ericson's closest-point regions).
-fn triangle_distance(q: glamx::DVec3, a: glamx::DVec3, b: glamx::DVec3, c: glamx::DVec3) -> f64 {
-    let (ab, ac, ap) = (b - a, c - a, q - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (q - a).length();
-    }
-    let bp = q - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return (q - b).length();
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return (q - (a + ab * v)).length();
-    }
-    let cp = q - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return (q - c).length();
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return (q - (a + ac * w)).length();
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (q - (b + (c - b) * w)).length();
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    (q - (a + ab * v + ac * w)).length()
-}
-
-/// The inner shape and the border radius of a round shape.
-fn round_parts(shape: &dyn Shape) -> Option<(&dyn Shape, Real)> {
-    match shape.as_typed_shape() {
-        TypedShape::RoundCuboid(r) => Some((&r.inner_shape, r.border_radius)),
-        TypedShape::RoundTriangle(r) => Some((&r.inner_shape, r.border_radius)),
-        TypedShape::RoundCylinder(r) => Some((&r.inner_shape, r.border_radius)),
-        TypedShape::RoundCone(r) => Some((&r.inner_shape, r.border_radius)),
-        TypedShape::RoundConvexPolyhedron(r) => Some((&r.inner_shape, r.border_radius)),
-        _ => None,
-    }
 }
 
 /// The checks of claim (3) for one shape: vertices on parry's surface within `bound` (plus
