@@ -201,6 +201,12 @@ impl SurfaceBvh {
             .map(|l| self.leaf_box(l, before))
             .collect();
         self.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+        self.forget_changes();
+    }
+
+    /// Every leaf may have changed: the tools' cached answers ([`Self::near_cached`]) are
+    /// dropped with the log of changed leaves.
+    fn forget_changes(&mut self) {
         self.generation += 1;
         self.log_base += self.log.len();
         self.log.clear();
@@ -233,9 +239,7 @@ impl SurfaceBvh {
                 self.bvh.insert_or_update_partially(b, l as u32, 0.0);
             }
             self.bvh.refit_without_opt();
-            self.generation += 1;
-            self.log_base += self.log.len();
-            self.log.clear();
+            self.forget_changes();
             return;
         }
         self.changed.clear();

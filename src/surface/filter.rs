@@ -343,7 +343,7 @@ impl Filter {
         }
         for chunk in missing.chunks(COLUMN_BATCH) {
             llt.columns(chunk, |c, col| {
-                columns.insert(chunk[c], col.to_vec());
+                columns.insert(chunk[c], col);
             });
         }
     }

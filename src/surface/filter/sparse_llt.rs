@@ -167,7 +167,7 @@ impl SparseLlt {
 
     /// Columns `js` of `S⁻¹` (at most [`COLUMN_BATCH`], each below [`Self::n`]), handed to
     /// `out(k, column)` for `js[k]`.
-    pub fn columns(&self, js: &[u32], mut out: impl FnMut(usize, &[f64])) {
+    pub fn columns(&self, js: &[u32], mut out: impl FnMut(usize, Vec<f64>)) {
         let n = self.n();
         let js = &js[..js.len().min(COLUMN_BATCH)];
         match Columns::of(&self.symbolic, &self.values, self.simplicial.as_ref()) {
@@ -184,8 +184,7 @@ impl SparseLlt {
                 }
                 self.faer_solve(e.as_mut());
                 for k in 0..js.len() {
-                    let col: Vec<f64> = e.col(k).iter().copied().collect();
-                    out(k, &col);
+                    out(k, e.col(k).iter().copied().collect());
                 }
             }
         }
@@ -299,7 +298,7 @@ impl<'a> Columns<'a> {
     }
 
     /// Columns `js` (at most `W`) of `S⁻¹`, solved together, to `out`.
-    fn columns<const W: usize>(&self, js: &[u32], out: &mut impl FnMut(usize, &[f64])) {
+    fn columns<const W: usize>(&self, js: &[u32], out: &mut impl FnMut(usize, Vec<f64>)) {
         let n = self.s.perm.len();
         let mut x = vec![[0.0; W]; n];
         let mut start = n;
@@ -312,12 +311,12 @@ impl<'a> Columns<'a> {
         // Rows above the first unit stay zero through the forward pass.
         self.forward(&mut x, start);
         self.backward(&mut x);
-        let mut col = vec![0.0; n];
         for k in 0..js.len().min(W) {
+            let mut col = vec![0.0; n];
             for (c, &p) in x.iter().zip(&self.s.perm) {
                 col[p as usize] = c[k];
             }
-            out(k, &col);
+            out(k, col);
         }
     }
 
