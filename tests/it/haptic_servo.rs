@@ -23,6 +23,10 @@ struct Run {
     /// Per update with a contact: (the model's error, the full solution's change since the
     /// last update) (N).
     errors: Vec<(f32, f32)>,
+    /// Per update with a contact, the full solution's larger change over the last two
+    /// updates (N): the model is built from the last solution and its secant with the one
+    /// before.
+    recent_jumps: Vec<f32>,
     /// Largest full-solution force (N).
     peak: f32,
     /// The hand's books.
@@ -57,13 +61,14 @@ fn run_linked(
     let mut run = Run {
         worst_error: 0.0,
         errors: Vec::new(),
+        recent_jumps: Vec::new(),
         peak: 0.0,
         rendered_work: 0.0,
         damping_loss: 0.0,
         contacts: 0,
     };
     let steps = (seconds / world_dt).round() as usize;
-    let mut last = Vector::ZERO;
+    let (mut last, mut before_last) = (Vector::ZERO, Vector::ZERO);
     for _ in 0..steps {
         let mut predicted = Vector::ZERO;
         for _ in 0..ticks_per_step {
@@ -77,9 +82,12 @@ fn run_linked(
         }
         let error = (predicted - actual).length();
         if actual != Vector::ZERO || predicted != Vector::ZERO {
-            run.errors.push((error, (actual - last).length()));
+            let jump = (actual - last).length();
+            run.errors.push((error, jump));
+            run.recent_jumps
+                .push(jump.max((last - before_last).length()));
         }
-        last = actual;
+        (before_last, last) = (last, actual);
         run.worst_error = run.worst_error.max(error);
     }
     run.rendered_work = servo.device().rendered_work();
@@ -217,14 +225,21 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
         assert!(run.peak > 0.05, "{size} m plate: peak {} N", run.peak);
         // Within 5 % of the peak at nearly every update; at the few where the full solution
         // itself jumps (a vertex captured or let go under a tool holding a handful, the
-        // impact of a first touch), no worse than holding the last full solution.
+        // impact of a first touch), no worse than holding the last full solution. The model
+        // is built from the last full solution and its secant with the one before, so a jump
+        // at either of the last two updates counts: the flat cube, whose face presses the
+        // triangles round the vertex it holds, catches and lets go of that vertex as it is
+        // dragged, trading a held vertex for a pressed point (the same count of contacts,
+        // which the secant took for a stiffness: 0.235 N off at the update after, where the
+        // full solution moved 0.004 N, against 0.225 N allowed).
         let tolerance = 0.05 * run.peak;
         let within = run.errors.iter().filter(|(e, _)| *e <= tolerance).count();
         let share = within as f32 / run.errors.len() as f32;
         let (e, jump) = run
             .errors
             .iter()
-            .copied()
+            .zip(&run.recent_jumps)
+            .map(|(&(e, _), &j)| (e, j))
             .max_by(|a, b| (a.0 - hold_factor * a.1).total_cmp(&(b.0 - hold_factor * b.1)))
             .unwrap();
         let smooth_misses = run
@@ -245,7 +260,7 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
         );
         assert!(
             e <= tolerance + hold_factor * jump,
-            "{size} m plate, k {k}: missed by {e} N where the full solution moved {jump} N"
+            "{size} m plate, k {k}: missed by {e} N where the full solution moved {jump} N over two updates"
         );
     }
 }

@@ -620,10 +620,20 @@ fn bad_point_presses_are_errors() {
     assert_eq!(s.num_point_holds(), 0);
     // Only a pinned vertex: nothing to move.
     assert_eq!(s.press_point(&[(0, 1.0)], down, 0.01, 0.0), Ok(None));
-    // On a held vertex: its holder carries it.
+    // Beside a held vertex: the held vertex stays where its holder keeps it, and the free one
+    // takes the whole press (the midpoint 1 cm down: vertex 5 by 2 cm).
     s.hold(4).unwrap();
+    let (held0, free0) = (s.position(4), s.position(5));
+    assert!(s
+        .press_point(&[(4, 0.5), (5, 0.5)], down, 0.01, 0.0)
+        .unwrap()
+        .is_some());
+    assert_eq!(s.position(4), held0);
+    assert!((s.position(5) - free0 - down * 0.02).length() < 1e-6);
+    // Mostly on the held vertex (less than a quarter of the weight free): its holder carries
+    // it.
     assert_eq!(
-        s.press_point(&[(4, 0.5), (5, 0.5)], down, 0.01, 0.0),
+        s.press_point(&[(4, 0.8), (6, 0.2)], down, 0.01, 0.0),
         Ok(None)
     );
     // Two free vertices: the midpoint moves 1 cm down, equal masses share it equally.

@@ -317,16 +317,13 @@ fn two_jaw_compound_tool_holds_with_both_jaws_and_gets_the_pins_force() {
     );
 }
 
-/// A case the property test above finds with `PROPTEST_RNG_SEED=3` (shrunk to the two jaws
+/// A case the property test above found with `PROPTEST_RNG_SEED=3` (shrunk to the two jaws
 /// over the plate's centre, untilted): one jaw alone, a 3 × 6 × 4 cm cuboid pressed flat at
-/// (-0.075, 0), has its corner (-0.09, -0.02) 1.1 mm under the surface at step 25. Its face
+/// (-0.075, 0), had its corner (-0.09, -0.02) 1.1 mm under the surface at step 25. Its face
 /// holds the surface vertex at (-0.0625, 0); the corner lies in a triangle with that vertex,
-/// whose press `MassSpringSurface::press_points` leaves to the vertex's holder, and the
-/// triangle's two free vertices stay up. Pressing such points through the free vertices (the
-/// held one immovable) kept the corner out but broke five friction and grasp tests: open
-/// (issue 13).
+/// whose press `MassSpringSurface::press_points` left to the vertex's holder, and the
+/// triangle's two free vertices stayed up. It now presses them.
 #[test]
-#[ignore = "known failure, issue 13: presses on a triangle with a held vertex are dropped"]
 fn a_flat_cuboid_keeps_its_corners_out_of_a_triangle_beside_a_held_vertex() {
     let shape = SharedShape::cuboid(0.015, 0.03, 0.02);
     let probes: Vec<Vector> = [-0.015, 0.015]

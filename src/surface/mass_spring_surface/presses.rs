@@ -169,12 +169,14 @@ impl MassSpringSurface {
     /// pulled as well as pushed). A press with a negative `depth` (its
     /// holder is that far above it), or one the others' pushes already satisfy (pushing one
     /// point of a triangle moves its neighbours), is not moved and is held as a speculative
-    /// contact: over the next step it may close its gap to the holder, not pass it. Returns each
-    /// press's index
-    /// for [`MassSpringSurface::point_impulse`], or `None` for a press on a held vertex (its
-    /// holder carries the contact there) or with less than a quarter of its weight on free
-    /// vertices (its pinned vertices carry it). The explicit and Baraff-Witkin integrators apply
-    /// the position and velocity changes but do not hold the points during the step.
+    /// contact: over the next step it may close its gap to the holder, not pass it. A press on
+    /// a triangle with a held vertex moves the triangle's other vertices (a flat face holding a
+    /// vertex presses the triangles round it: its corners stay out of them). Returns each
+    /// press's index for [`MassSpringSurface::point_impulse`], or `None` for a press with less
+    /// than a quarter of its weight on vertices that can move (its pinned or held vertices
+    /// carry it: moving it would fling its free vertex by depth / weight). The explicit and
+    /// Baraff-Witkin integrators apply the position and velocity changes but do not hold the
+    /// points during the step.
     ///
     /// # Errors
     /// [`SurfaceError::VertexOutOfRange`]; [`SurfaceError::InvalidPointHold`] for a press with
@@ -189,11 +191,11 @@ impl MassSpringSurface {
         for p in presses {
             holds.push(self.point_hold(p)?);
         }
-        // The movable share of each vertex: 1/m, zero for pinned vertices (presses on held
-        // vertices are not kept, below).
+        // The movable share of each vertex: 1/m, zero for pinned and held vertices (a held
+        // vertex stays where its holder keeps it; a press beside it moves the others).
         let inv_mass = |s: &Self, v: u32| {
             let v = v as usize;
-            if s.pinned[v] {
+            if s.pinned[v] || s.held[v] {
                 0.0
             } else {
                 1.0 / s.mass[v]
@@ -202,19 +204,14 @@ impl MassSpringSurface {
         let mut out = Vec::with_capacity(presses.len());
         let mut kept: Vec<(PointHold, f64, f64)> = Vec::new();
         for (hold, p) in holds.into_iter().zip(presses) {
-            // The weight on vertices that can move: a point mostly on pinned vertices is
-            // carried by them (moving it would fling its free vertex by depth / weight).
+            // The weight on vertices that can move: a point mostly on pinned or held vertices
+            // is carried by them (moving it would fling its free vertex by depth / weight).
             let movable: f64 = hold
                 .entries()
                 .filter(|&(v, _)| inv_mass(self, v) > 0.0)
                 .map(|(_, w)| w)
                 .sum();
-            // A point on a held vertex is left to that vertex's holder, which already
-            // carries the contact there.
-            let on_held = hold
-                .entries()
-                .any(|(v, w)| w > 0.0 && self.held[v as usize]);
-            if movable >= MIN_MOVABLE_WEIGHT && !on_held {
+            if movable >= MIN_MOVABLE_WEIGHT {
                 let velocity: f64 = hold
                     .entries()
                     .map(|(v, w)| w * self.vel[v as usize].dot(hold.normal))
@@ -344,10 +341,14 @@ impl MassSpringSurface {
             carried,
             cone,
             tangent_impulse: DVec3::ZERO,
+            held_share: 0.0,
         };
         for (k, &(v, w)) in vertices.iter().enumerate() {
             hold.vertices[k] = v;
             hold.weights[k] = w as f64 / total;
+            if self.held[v as usize] {
+                hold.held_share += hold.weights[k];
+            }
         }
         Ok(hold)
     }
@@ -355,20 +356,26 @@ impl MassSpringSurface {
     /// The impulse (N·s, along its normal; positive when pushing) hold `id` of
     /// [`MassSpringSurface::press_points`] has given the surface: the press's own velocity
     /// change, plus the constraint impulse of the filtered step after it (all the momentum the
-    /// holder gave the surface from the press to the end of that step). `None` for no such
-    /// hold.
+    /// holder gave the surface from the press to the end of that step). The share of a vertex
+    /// that was held when it was pressed is left out: that vertex's holder keeps it where it
+    /// is, taking that share itself (a tool pressing a triangle beside a vertex it holds gives
+    /// the surface the rest; its hold of the vertex gives the vertex's own force). `None` for
+    /// no such hold.
     pub fn point_impulse(&self, id: usize) -> Option<Real> {
-        self.point_holds.get(id).map(|h| h.impulse as Real)
+        self.point_holds
+            .get(id)
+            .map(|h| (h.impulse * (1.0 - h.held_share)) as Real)
     }
 
     /// The impulse (N·s, in its tangent plane) the holder of hold `id` of
     /// [`MassSpringSurface::press_points`] gave the surface along the point's tangent plane
-    /// (friction, [`Tangential`]) in the filtered step after the press; zero for a frictionless
-    /// press, `None` for no such hold.
+    /// (friction, [`Tangential`]) in the filtered step after the press, less a held vertex's
+    /// share as [`MassSpringSurface::point_impulse`]; zero for a frictionless press, `None` for
+    /// no such hold.
     pub fn point_tangent_impulse(&self, id: usize) -> Option<Vector> {
         self.point_holds
             .get(id)
-            .map(|h| h.tangent_impulse.as_vec3())
+            .map(|h| (h.tangent_impulse * (1.0 - h.held_share)).as_vec3())
     }
 
     /// How many points are held (see [`MassSpringSurface::press_point`]).
