@@ -249,9 +249,10 @@ pub(super) struct ToolState {
 ///
 /// # Limitations
 /// - Curved tools load the surface's vertices only (mesh it finer than a ball). Polyhedral
-///   tools also press their vertices and edges between the surface's vertices, except next to
-///   a vertex they hold (left to that vertex's holder): a flat face holding a vertex sinks its
-///   corners into the triangles around it, up to about a millimetre at first contact.
+///   tools also press their vertices and edges between the surface's vertices, next to a
+///   vertex they hold too, except points with less than a quarter of their weight off the
+///   held vertex (left to that vertex's holder): a corner there can end tens of micrometres
+///   inside a triangle.
 /// - Tools are tested with parry's point queries: convex shapes. Balls, cuboids, capsules and
 ///   cylinders give steady forces, and so does a box-shaped convex polyhedron. A rounded
 ///   convex polyhedron (the hull of an icosphere) holds vertices but its force fluctuates from
