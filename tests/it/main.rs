@@ -5,6 +5,7 @@ mod common;
 mod compare_scenes;
 mod coupling;
 mod curved_reconstruction;
+mod dynamic_drops;
 mod every_scale;
 mod fig4;
 mod friction;
