@@ -3,7 +3,7 @@
 //! on scenes nobody tuned. A hand's books (`SimulatedHand::rendered_work` against its damping's
 //! loss in contact) are the independent measure.
 
-use super::haptic_servo::press_drag_lift;
+use super::haptic_agreement::press_drag_lift;
 use crate::common::plate_scene;
 use proptest::prelude::*;
 use rapier_touch::haptics::{haptic_link, Servo, SimulatedHand, VirtualCoupling};
