@@ -26,6 +26,7 @@ mod reconstruction_bad_input;
 mod reconstruction_properties;
 mod rigid_motion;
 mod round_tools;
+mod shape_meshes;
 mod sharp_tools;
 mod spinning_drop;
 mod stress_scenes;
