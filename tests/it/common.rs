@@ -284,8 +284,38 @@ pub fn scaled_pose(p: &Pose, k: f32) -> Pose {
     Pose::from_parts(p.translation * k, p.rotation)
 }
 
-/// A plate `size` wide (`cells` per side, rim pinned) of edge stiffness `k` on a fixed body,
-/// and a kinematic tool of `shape` above it.
+/// A plate `size` wide in the xz-plane (`cells` per side, rim pinned) of edge stiffness `k`
+/// and damping `0.02 √k`, `mass` in all (`None`: the builder's default areal density), on a
+/// fixed body of `world`, with its collider, stepped in `substeps`.
+pub fn pinned_plate(
+    world: &mut rapier_touch::rapier3d::prelude::PhysicsWorld,
+    size: f32,
+    cells: u32,
+    k: f32,
+    mass: Option<f32>,
+    substeps: u32,
+) -> (SurfaceSet, SurfaceHandle) {
+    use rapier_touch::rapier3d::prelude::*;
+    let fixed = world.insert_body(RigidBodyBuilder::fixed());
+    let mut builder = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
+        .stiffness(k)
+        .damping(0.02 * k.sqrt())
+        .pinned(plate_rim(cells, cells));
+    if let Some(mass) = mass {
+        builder = builder.mass(MassDistribution::Total(mass));
+    }
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps,
+        collider: true,
+    };
+    let h = set
+        .insert(builder.build().unwrap(), fixed, world, options)
+        .unwrap();
+    (set, h)
+}
+
+/// [`pinned_plate`] with no gravity, and a kinematic tool of `shape` above it.
 pub fn plate_scene(
     size: f32,
     cells: u32,
@@ -300,25 +330,11 @@ pub fn plate_scene(
     SurfaceHandle,
 ) {
     use rapier_touch::rapier3d::prelude::*;
-    use rapier_touch::surface::meshing::{plate, plate_rim};
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
     };
-    let fixed = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
-        .stiffness(k)
-        .damping(0.02 * k.sqrt())
-        .mass(MassDistribution::Total(mass))
-        .pinned(plate_rim(cells, cells))
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps,
-        collider: true,
-    };
-    let h = set.insert(surface, fixed, &mut world, options).unwrap();
+    let (set, h) = pinned_plate(&mut world, size, cells, k, Some(mass), substeps);
     let body = world.insert_body(
         RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, size, 0.0)),
     );

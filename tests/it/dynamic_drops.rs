@@ -17,10 +17,10 @@
 //! The fix is item 4's implicit coupling (the body's mass in the constraint solve of the same
 //! step); not built.
 
+use crate::common::pinned_plate;
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
-use rapier_touch::surface::meshing::{plate, plate_rim};
 
 /// What one drop saw.
 struct Drop {
@@ -37,24 +37,12 @@ struct Drop {
     support: f32,
 }
 
-/// A 1 m plate of 16 × 16 cells (rim pinned, edges of `k`, the default areal density), a ball
-/// of 8 cm radius and `mass` dropped from `height` above it, `substeps` per rigid step, 10 s.
+/// A 1 m plate of 16 × 16 cells ([`pinned_plate`]: rim pinned, edges of `k`, the default areal
+/// density), a ball of 8 cm radius and `mass` dropped from `height` above it, `substeps` per
+/// rigid step, 10 s.
 fn drop(mass: f32, height: f32, k: f32, substeps: u32) -> Drop {
     let mut world = PhysicsWorld::default();
-    let fixed = world.insert_body(RigidBodyBuilder::fixed());
-    let cells = 16;
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, cells, cells))
-        .stiffness(k)
-        .damping(0.02 * k.sqrt())
-        .pinned(plate_rim(cells, cells))
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps,
-        collider: true,
-    };
-    let soft = set.insert(surface, fixed, &mut world, options).unwrap();
+    let (mut set, soft) = pinned_plate(&mut world, 1.0, 16, k, None, substeps);
     let r = 0.08;
     let density = mass / (4.0 / 3.0 * std::f32::consts::PI * r * r * r);
     let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
