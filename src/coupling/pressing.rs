@@ -165,6 +165,7 @@ pub(super) fn press_all(
             depth: c.depth,
             normal_velocity: v.dot(c.normal),
             tangential: friction_of(v, owner),
+            holder: None,
         })
         .collect();
     // The geometry layer's contacts are finite, with weights on existing vertices: an error

@@ -19,6 +19,7 @@ mod dynamics;
 mod motion_watch;
 mod point_hold;
 mod presses;
+mod rigid_holder;
 use baraff_witkin::CgScratch;
 use builder::check_spring;
 pub use builder::MassSpringSurfaceBuilder;
@@ -27,6 +28,8 @@ pub use motion_watch::Escaped;
 use motion_watch::MotionWatch;
 use point_hold::{ActiveMemory, PointHold};
 pub use presses::{PointPress, Tangential};
+use rigid_holder::HolderState;
+pub use rigid_holder::RigidHolder;
 
 /// Why a surface could not be built or changed. Each variant says how to fix the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -77,6 +80,10 @@ pub enum SurfaceError {
     /// a non-finite depth or velocity.
     #[error("invalid point hold (1-3 vertices, weights >= 0 summing > 0, finite unit normal)")]
     InvalidPointHold,
+    /// A rigid holder ([`MassSpringSurface::set_holders`]) has a non-finite entry, or an
+    /// inverse mass or inertia with a negative diagonal entry.
+    #[error("invalid rigid holder (finite, inverse mass and inertia >= 0 on the diagonal)")]
+    InvalidHolder,
     /// The implicit filter could not be built.
     #[error(transparent)]
     Filter(#[from] FilterError),
@@ -303,6 +310,8 @@ pub struct MassSpringSurface {
     held_forces: Vec<(u32, DVec3)>,
     any_held: bool,
     point_holds: Vec<PointHold>,
+    /// The rigid holders the point holds may name ([`Self::set_holders`]).
+    holders: Vec<HolderState>,
     /// Which constraint rows pushed in the last filtered step's solve (its warm start).
     pushing: ActiveMemory,
     /// Which vertices moved far ([`Self::watch_motion`]); `None` until watched.

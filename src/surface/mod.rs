@@ -14,6 +14,6 @@ pub mod meshing;
 pub use filter::{FilterError, FilterKind};
 pub use mass_spring_surface::{
     Escaped, ForceProfile, Integrator, MassDistribution, MassSpringSurface,
-    MassSpringSurfaceBuilder, PointPress, SpringModel, SurfaceError, Tangential,
+    MassSpringSurfaceBuilder, PointPress, RigidHolder, SpringModel, SurfaceError, Tangential,
     DEFAULT_AREA_DENSITY,
 };

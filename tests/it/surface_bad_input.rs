@@ -145,6 +145,7 @@ fn bad_point_presses_are_errors() {
             depth: 0.01,
             normal_velocity: 0.0,
             tangential,
+            holder: None,
         };
         assert_eq!(
             s.press_points(&[press]),

@@ -18,17 +18,27 @@
 /// that comes back later is appended after the rows kept. A row whose pivot is below
 /// [`REDUNDANT`] of its diagonal is the one left out.
 ///
+/// `reference` gives each row the length that test measures against, in place of its diagonal
+/// (empty: the diagonal). A rigid holder's mass in the filtered step's solve
+/// ([`super::rigid_holder`]) adds a term of rank six at most to the rows it holds: for a light
+/// body it dwarfs the surface's own compliance, and every row past the sixth would look like
+/// a repeat of the others against its diagonal. Measured against the surface's part of the
+/// diagonal, a row repeats the others only where the surface alone says so (the holder's
+/// term, positive semi-definite, only raises the pivots).
+///
 /// `factor` is the storage of the Cholesky factor, kept by the caller from one solve to the
 /// next.
 pub(super) fn solve_pushing(
     a: &nalgebra::DMatrix<f64>,
     b: &nalgebra::DVector<f64>,
-    push_only: impl Fn(usize) -> bool,
-    starts_in: impl Fn(usize) -> bool,
+    (push_only, starts_in): (impl Fn(usize) -> bool, impl Fn(usize) -> bool),
+    reference: &[f64],
     tol: f64,
     factor: &mut Vec<f64>,
 ) -> Option<(nalgebra::DVector<f64>, Vec<bool>)> {
     let mut chol = Cholesky::new(b.len(), std::mem::take(factor));
+    chol.reference.clear();
+    chol.reference.extend_from_slice(reference);
     let solved = solve_on(&mut chol, a, b, push_only, starts_in, tol);
     *factor = chol.l;
     solved
@@ -212,6 +222,8 @@ struct Cholesky {
     l: Vec<f64>,
     stride: usize,
     y: Vec<f64>,
+    /// Each row's length for the repeat test (empty: `A`'s diagonal; see [`solve_pushing`]).
+    reference: Vec<f64>,
 }
 
 /// `Σ a_j b_j` in four independent sums (a single running sum waits on each addition).
@@ -241,7 +253,13 @@ impl Cholesky {
             l: storage,
             stride: m,
             y: Vec::with_capacity(m),
+            reference: Vec::new(),
         }
+    }
+
+    /// Row `i`'s length for the repeat test ([`REDUNDANT`]).
+    fn length(&self, a: &nalgebra::DMatrix<f64>, i: usize) -> f64 {
+        self.reference.get(i).copied().unwrap_or(a[(i, i)])
     }
 
     /// Factorizes `A` on `rows`, in order, leaving out the rows that nearly repeat those kept
@@ -309,7 +327,7 @@ impl Cholesky {
             // As in `push`: a pivot (squared) at or below `REDUNDANT` of its diagonal, or not
             // a number, ends what is taken.
             let squared = pivot * pivot;
-            if squared.is_nan() || squared <= REDUNDANT * a[(i, i)] || !pivot.is_finite() {
+            if squared.is_nan() || squared <= REDUNDANT * self.length(a, i) || !pivot.is_finite() {
                 return Some(r);
             }
             for c in 0..=r {
@@ -335,7 +353,7 @@ impl Cholesky {
         let row = &self.l[k * n..k * n + k];
         let pivot = a[(i, i)] - dot(row, row);
         // Also a NaN pivot: such a row is left out.
-        if pivot.is_nan() || pivot <= REDUNDANT * a[(i, i)] {
+        if pivot.is_nan() || pivot <= REDUNDANT * self.length(a, i) {
             return false;
         }
         self.l[k * n + k] = pivot.sqrt();

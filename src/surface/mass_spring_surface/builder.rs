@@ -315,6 +315,7 @@ impl MassSpringSurfaceBuilder {
             held_forces: Vec::new(),
             any_held: false,
             point_holds: Vec::new(),
+            holders: Vec::new(),
             pushing: ActiveMemory::default(),
             watch: None,
         };

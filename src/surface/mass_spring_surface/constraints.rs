@@ -7,9 +7,12 @@
 use super::active_set::{give_back, solve_pushing, zeroed};
 use super::blocks::independent_blocks;
 use super::point_hold::{ActiveMemory, PointHold, Remembered};
-use super::NOT_FREE;
+use super::rigid_holder::{give_impulses, merge_blocks, motion, HolderRow, HolderState};
 use crate::surface::filter::{Filter, FilterKind};
 use glamx::DVec3;
+use rows::{rows, Con, Row, Rows};
+
+mod rows;
 
 /// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
 /// weighted set of vertices: a sliding vertex hold (its normal, weight 1), a full vertex hold
@@ -23,10 +26,13 @@ use glamx::DVec3;
 /// filter's own rows (neighbour) or one cached solve each (exact). A point its holder carries
 /// (static friction) has two more rows, bilateral, along its tangent plane: they hold its
 /// tangential velocity at the holder's while its normal row pushes, and go with it when it is
-/// let go.
+/// let go. A point on a rigid holder is held at the holder's velocity after the step: the
+/// holder's compliance joins `A` between its rows ([`super::rigid_holder`]), and each holder
+/// takes its rows' impulses.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn constrain(
     filter: &mut Filter,
+    holders: &mut [HolderState],
     free: &[u32],
     free_index: &[u32],
     held: &[bool],
@@ -36,72 +42,39 @@ pub(super) fn constrain(
     dv: &mut [DVec3],
     memory: &mut ActiveMemory,
 ) {
-    // The free slots involved, sorted (the neighbour filter's gather searches them).
-    let mut list: Vec<u32> = free
-        .iter()
-        .enumerate()
-        .filter(|(_, &v)| held[v as usize])
-        .map(|(fi, _)| fi as u32)
-        .collect();
-    for p in points.iter() {
-        for (v, _) in p.entries() {
-            let fi = free_index[v as usize];
-            if fi != NOT_FREE {
-                list.push(fi);
-            }
-        }
-    }
-    list.sort_unstable();
-    list.dedup();
-    let h = list.len();
-    if h == 0 {
+    let Some(Rows {
+        list,
+        cons,
+        normal_row,
+        tangent_rows,
+    }) = rows(free, free_index, held, held_normal, points)
+    else {
         return;
-    }
-    let slot = |fi: u32| list.binary_search(&fi).ok();
-    // Constraints: direction, (slot, weight) entries, and what they hold.
-    type Con = (DVec3, [(usize, f64); 3], usize, Row);
-    let mut cons: Vec<Con> = Vec::with_capacity(h);
-    for (k, &fi) in list.iter().enumerate() {
-        let v = free[fi as usize] as usize;
-        if !held[v] {
-            continue;
-        }
-        let entry = [(k, 1.0), (0, 0.0), (0, 0.0)];
-        let n = held_normal[v];
-        if n == DVec3::ZERO {
-            cons.extend([DVec3::X, DVec3::Y, DVec3::Z].map(|d| (d, entry, 1, Row::Vertex)));
-        } else {
-            cons.push((n, entry, 1, Row::Vertex));
-        }
-    }
-    for (pi, p) in points.iter().enumerate() {
-        let mut entry = [(0, 0.0); 3];
-        let mut count = 0;
-        for (v, w) in p.entries() {
-            if let Some(k) = slot(free_index[v as usize]) {
-                entry[count] = (k, w);
-                count += 1;
+    };
+    let h = list.len();
+    // The rows on rigid holders, and the holder's compliance between two rows.
+    let holder_rows: Vec<Option<HolderRow>> = cons
+        .iter()
+        .map(|(d, _, _, row)| match *row {
+            Row::Normal(pi) | Row::Tangent(pi) => {
+                let (k, arm) = points[pi].holder?;
+                holders.get(k).map(|s| HolderRow::new(k, s, *d, arm))
             }
+            Row::Vertex => None,
+        })
+        .collect();
+    let any_holder = holder_rows.iter().any(Option::is_some);
+    let coupling = |a: usize, b: usize| match (&holder_rows[a], &holder_rows[b]) {
+        (Some(x), Some(y)) => x.coupling(y),
+        _ => 0.0,
+    };
+    // What the holders' motion under some impulses takes off row `c`.
+    let holder_along = |c: usize, m: &[(DVec3, DVec3)]| {
+        if m.is_empty() {
+            return 0.0;
         }
-        if count > 0 {
-            cons.push((p.normal, entry, count, Row::Normal(pi)));
-            if p.carried.is_some() {
-                let (t1, t2) = p.normal.any_orthonormal_pair();
-                cons.push((t1, entry, count, Row::Tangent(pi)));
-                cons.push((t2, entry, count, Row::Tangent(pi)));
-            }
-        }
-    }
-    // The normal row of each point hold, and its tangent rows.
-    let mut normal_row = vec![usize::MAX; points.len()];
-    let mut tangent_rows: Vec<Option<(usize, usize)>> = vec![None; points.len()];
-    for (c, con) in cons.iter().enumerate() {
-        match con.3 {
-            Row::Normal(pi) => normal_row[pi] = c,
-            Row::Tangent(pi) if tangent_rows[pi].is_none() => tangent_rows[pi] = Some((c, c + 1)),
-            _ => {}
-        }
-    }
+        holder_rows[c].map_or(0.0, |r| r.along(m))
+    };
     // P restricted to the involved vertices (h × h), one column read each.
     let mut p_hh = zeroed(&mut memory.scratch.block, h, h);
     filter.prepare_columns(&list);
@@ -142,9 +115,12 @@ pub(super) fn constrain(
                     .iter()
                     .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
                     .sum::<f64>(),
-                Row::Normal(pi) => points[pi].min_velocity - along(),
+                Row::Normal(pi) => points[pi].normal_target(holders) - along(),
                 Row::Tangent(pi) => {
-                    points[pi].carried.map_or(0.0, |target| da.dot(target)) - along()
+                    points[pi]
+                        .carried_target(holders)
+                        .map_or(0.0, |target| da.dot(target))
+                        - along()
                 }
             }
         })
@@ -176,6 +152,12 @@ pub(super) fn constrain(
         cons.iter()
             .map(|(_, e, n, _)| e[..*n].iter().map(|&(k, _)| k)),
     );
+    // A holder's compliance joins the blocks its rows are in.
+    let blocks = if any_holder {
+        merge_blocks(blocks, &holder_rows)
+    } else {
+        blocks
+    };
     let mut lambda = vec![0.0; m];
     let mut active = vec![false; m];
     // Each point with friction starts as it ended the last step (stuck, or sliding the same
@@ -344,7 +326,7 @@ pub(super) fn constrain(
                             } else {
                                 a_entry(&cons[ca], &cons[cb])
                             };
-                            entry + if i == j { 1e-12 * scale } else { 0.0 }
+                            entry + coupling(ca, cb) + if i == j { 1e-12 * scale } else { 0.0 }
                         }
                     };
                 }
@@ -362,13 +344,31 @@ pub(super) fn constrain(
             } else {
                 slot_velocities(&mut fixed.iter().copied())
             };
-            let b =
-                nalgebra::DVector::from_fn(mb, |i, _| rhs[rows[i]] - along(rows[i], &from_fixed));
+            let fixed_motion = if any_holder && !fixed.is_empty() {
+                motion(&holder_rows, holders.len(), fixed.iter().copied())
+            } else {
+                Vec::new()
+            };
+            let b = nalgebra::DVector::from_fn(mb, |i, _| {
+                rhs[rows[i]] - along(rows[i], &from_fixed) - holder_along(rows[i], &fixed_motion)
+            });
+            // With a holder, a row repeats the others only where the surface's part of `A`
+            // says so (`solve_pushing`).
+            let reference: Vec<f64> = if any_holder {
+                rows.iter()
+                    .map(|&c| a_entry(&cons[c], &cons[c]) + 1e-12 * scale)
+                    .collect()
+            } else {
+                Vec::new()
+            };
             let solved = solve_pushing(
                 &a_mat,
                 &b,
-                |i| matches!(cons[rows[i]].3, Row::Normal(pi) if !points[pi].grasped()),
-                |i| in_last[rows[i]].unwrap_or(starts_in[rows[i]]),
+                (
+                    |i| matches!(cons[rows[i]].3, Row::Normal(pi) if !points[pi].grasped()),
+                    |i| in_last[rows[i]].unwrap_or(starts_in[rows[i]]),
+                ),
+                &reference,
                 tol,
                 &mut factor,
             );
@@ -386,20 +386,26 @@ pub(super) fn constrain(
             }
             let value = |c: usize| (at[c] != usize::MAX).then(|| (x[at[c]], act[at[c]]));
             // What row `c` still lacks of its target after the pass (only for sliding points).
-            let after = if frictional
+            let any_sliding = frictional
                 .iter()
-                .any(|&pi| matches!(grip[pi], Grip::Sliding { .. }))
-            {
-                slot_velocities(
-                    &mut fixed
-                        .iter()
-                        .copied()
-                        .chain(rows.iter().copied().zip(x.iter().copied())),
-                )
+                .any(|&pi| matches!(grip[pi], Grip::Sliding { .. }));
+            let all_impulses = || {
+                fixed
+                    .iter()
+                    .copied()
+                    .chain(rows.iter().copied().zip(x.iter().copied()))
+            };
+            let after = if any_sliding {
+                slot_velocities(&mut all_impulses())
             } else {
                 Vec::new()
             };
-            let residual = |c: usize| rhs[c] - along(c, &after);
+            let after_motion = if any_sliding && any_holder {
+                motion(&holder_rows, holders.len(), all_impulses())
+            } else {
+                Vec::new()
+            };
+            let residual = |c: usize| rhs[c] - along(c, &after) - holder_along(c, &after_motion);
             let mut changed = false;
             for &pi in &frictional {
                 let (Some((t1, t2)), Some((mu_s, mu_d))) = (tangent_rows[pi], points[pi].cone)
@@ -464,7 +470,7 @@ pub(super) fn constrain(
                 // otherwise push a point the wrong way for a step: energy from nothing).
                 for &((t1, t2), d, l) in &sliding {
                     let over = residual(t1) * d.0 + residual(t2) * d.1;
-                    let compliance = a_entry(&cons[t1], &cons[t1]);
+                    let compliance = a_entry(&cons[t1], &cons[t1]) + coupling(t1, t1);
                     let l = if over < 0.0 && compliance > 0.0 {
                         (l + over / compliance).max(0.0)
                     } else {
@@ -521,17 +527,7 @@ pub(super) fn constrain(
         }
     }
     filter.add_impulses(&list, &impulse, dv);
-}
-
-/// What a row of the filtered step's constraint solve holds.
-#[derive(Copy, Clone, Debug, PartialEq)]
-enum Row {
-    /// A held vertex, along one direction (bilateral).
-    Vertex,
-    /// Point hold `i`'s normal (push-only, bilateral for a grasped point).
-    Normal(usize),
-    /// One direction of point hold `i`'s tangent plane, while it is carried (bilateral).
-    Tangent(usize),
+    give_impulses(&holder_rows, &lambda, holders);
 }
 
 /// How a point with friction holds to its holder in a pass of the filtered step's solve.

@@ -263,9 +263,14 @@ impl MassSpringSurface {
             let gamma = (impulse - got) / total;
             self.dv.iter_mut().for_each(|dv| *dv += gamma);
         }
+        for h in &mut self.holders {
+            h.impulse = DVec3::ZERO;
+            h.angular_impulse = DVec3::ZERO;
+        }
         if self.any_held || !self.point_holds.is_empty() {
             constrain(
                 filter,
+                &mut self.holders,
                 &self.free,
                 &self.free_index,
                 &self.held,

@@ -3,6 +3,7 @@
 //! ([`ActiveMemory`]: which rows pushed, how the points with friction ended).
 
 use super::active_set::Scratch;
+use super::rigid_holder::HolderState;
 use glamx::DVec3;
 use parry3d::utils::hashmap::HashMap;
 use parry3d::utils::hashset::HashSet;
@@ -34,6 +35,10 @@ pub(crate) struct PointHold {
     /// The weight on vertices held when it was pressed: their holders keep them where they
     /// are, so that share of its impulses goes into them, not into the surface.
     pub(super) held_share: f64,
+    /// Its rigid holder ([`super::rigid_holder`]), and the holder's point that presses (from
+    /// the holder's centre once pressed; where it was given until then). With a holder, `min_velocity` and `carried` are relative to
+    /// the holder's velocity at that point, which the solve takes after the step.
+    pub(super) holder: Option<(usize, DVec3)>,
 }
 
 impl PointHold {
@@ -50,6 +55,23 @@ impl PointHold {
     /// Held in every direction, pulled as well as pushed.
     pub(super) fn grasped(&self) -> bool {
         self.carried.is_some() && self.cone.is_none()
+    }
+
+    /// The least velocity along its normal after the step, before the holder's own change.
+    pub(super) fn normal_target(&self, holders: &[HolderState]) -> f64 {
+        self.min_velocity + self.holder_velocity(holders).dot(self.normal)
+    }
+
+    /// The velocity it is carried with (static friction, grasp), before the holder's change.
+    pub(super) fn carried_target(&self, holders: &[HolderState]) -> Option<DVec3> {
+        self.carried.map(|v| v + self.holder_velocity(holders))
+    }
+
+    /// Its holder's velocity at the point (zero without a rigid holder).
+    fn holder_velocity(&self, holders: &[HolderState]) -> DVec3 {
+        self.holder
+            .and_then(|(k, arm)| holders.get(k).map(|h| h.velocity_at(arm)))
+            .unwrap_or(DVec3::ZERO)
     }
 
     pub(super) fn entries(&self) -> impl Iterator<Item = (u32, f64)> + '_ {

@@ -5,6 +5,7 @@
 
 use super::active_set::{give_back, solve_pushing, zeroed};
 use super::point_hold::PointHold;
+use super::rigid_holder::{HolderState, RigidHolder};
 use super::{motion_watch, MassSpringSurface, SurfaceError};
 use crate::math::{Real, Vector};
 use glamx::DVec3;
@@ -26,6 +27,15 @@ pub struct PointPress<'a> {
     pub normal_velocity: Real,
     /// What the holder does along the point's tangent plane (friction).
     pub tangential: Tangential,
+    /// The rigid holder pressing it, as an index into [`MassSpringSurface::set_holders`]'s
+    /// list and the holder's point that presses (its lever arm for the holder's turning), or
+    /// `None` for a holder whose motion nothing changes (kinematic). With a holder,
+    /// `normal_velocity` and the tangential velocity are the holder's at the point when
+    /// pressed: through the step the point follows the holder's velocity as the holders list
+    /// gives it then, changed by the impulses the surface gives the holder in the same solve
+    /// (implicit coupling), and the press gives the point no velocity change of its own (the
+    /// step's solve does, with the holder's mass).
+    pub holder: Option<(usize, Vector)>,
 }
 
 /// What a press's holder does along the pressed point's tangent plane in the next filtered
@@ -60,6 +70,7 @@ pub struct PointPress<'a> {
 ///         depth: 0.01,
 ///         normal_velocity: 0.0,
 ///         tangential,
+///         holder: None,
 ///     };
 ///     surface.press_points(&[press]).unwrap();
 ///     surface.step();
@@ -149,6 +160,7 @@ impl MassSpringSurface {
             depth,
             normal_velocity,
             tangential: Tangential::Free,
+            holder: None,
         };
         Ok(self.press_points(&[press])?.pop().flatten())
     }
@@ -181,8 +193,8 @@ impl MassSpringSurface {
     /// # Errors
     /// [`SurfaceError::VertexOutOfRange`]; [`SurfaceError::InvalidPointHold`] for a press with
     /// no vertex or more than three, a negative or non-finite weight, weights summing to zero, a
-    /// zero or non-finite normal, a non-finite depth, velocity or [`Tangential`]. Nothing is
-    /// pressed then.
+    /// zero or non-finite normal, a non-finite depth, velocity or [`Tangential`], or a holder
+    /// index past [`MassSpringSurface::set_holders`]'s list. Nothing is pressed then.
     pub fn press_points(
         &mut self,
         presses: &[PointPress<'_>],
@@ -217,7 +229,14 @@ impl MassSpringSurface {
                     .map(|(v, w)| w * self.vel[v as usize].dot(hold.normal))
                     .sum();
                 out.push(Some(self.point_holds.len() + kept.len()));
-                kept.push((hold, p.depth as f64, p.normal_velocity as f64 - velocity));
+                // A rigid holder's press changes no velocity: the step's solve meets the point
+                // and the holder with its mass.
+                let change = if hold.holder.is_some() {
+                    0.0
+                } else {
+                    p.normal_velocity as f64 - velocity
+                };
+                kept.push((hold, p.depth as f64, change));
             } else {
                 out.push(None);
             }
@@ -284,8 +303,29 @@ impl MassSpringSurface {
                     k.0.entries()
                         .map(|(v, w)| w * self.vel[v as usize].dot(k.0.normal))
                         .sum();
-                // The holder's velocity, as given, is the current point velocity plus `k.2`.
-                k.0.min_velocity = velocity + k.2 - gap / self.dt;
+                k.0.min_velocity = if k.0.holder.is_some() {
+                    k.0.min_velocity - gap / self.dt
+                } else {
+                    // The holder's velocity, as given, is the current point velocity plus
+                    // `k.2`.
+                    velocity + k.2 - gap / self.dt
+                };
+            }
+            // A rigid holder's targets become relative to its velocity at the point, which
+            // the step reads from the holders list.
+            for (hold, _, _) in kept.iter_mut() {
+                let Some((index, point)) = hold.holder else {
+                    continue;
+                };
+                let Some(state) = self.holders.get(index) else {
+                    hold.holder = None;
+                    continue;
+                };
+                let arm = point - state.centre;
+                let own = state.velocity_at(arm);
+                hold.holder = Some((index, arm));
+                hold.min_velocity -= own.dot(hold.normal);
+                hold.carried = hold.carried.map(|v| v - own);
             }
         }
         give_back(&mut scratch.system, a);
@@ -324,10 +364,13 @@ impl MassSpringSurface {
                 velocity.is_finite() && s.is_finite() && d >= 0.0 && d <= s,
             ),
         };
+        let holder_ok = p
+            .holder
+            .is_none_or(|(k, point)| k < self.holders.len() && point.is_finite());
         let (Some(n), true, true) = (
             n,
             total > 0.0 && total.is_finite(),
-            p.depth.is_finite() && p.normal_velocity.is_finite() && tangential_ok,
+            p.depth.is_finite() && p.normal_velocity.is_finite() && tangential_ok && holder_ok,
         ) else {
             return Err(SurfaceError::InvalidPointHold);
         };
@@ -342,6 +385,7 @@ impl MassSpringSurface {
             cone,
             tangent_impulse: DVec3::ZERO,
             held_share: 0.0,
+            holder: p.holder.map(|(k, point)| (k, point.as_dvec3())),
         };
         for (k, &(v, w)) in vertices.iter().enumerate() {
             hold.vertices[k] = v;
@@ -376,6 +420,35 @@ impl MassSpringSurface {
         self.point_holds
             .get(id)
             .map(|h| (h.tangent_impulse * (1.0 - h.held_share)).as_vec3())
+    }
+
+    /// Replaces the rigid holders that presses may name ([`PointPress::holder`], index into
+    /// `holders`): bodies whose mass enters the filtered step's solve (implicit coupling,
+    /// [`RigidHolder`]). Points already pressed keep their holder's index and follow the
+    /// velocity given here from the next step on: a caller moving a body between steps sets
+    /// its new velocity here. The surface never moves a holder: after a step, read what it
+    /// gave each one with [`MassSpringSurface::holder_impulse`] and move the body. The
+    /// explicit and Baraff-Witkin integrators do not hold points, nor couple holders.
+    ///
+    /// # Errors
+    /// [`SurfaceError::InvalidHolder`]; the holders are then left as they were.
+    pub fn set_holders(&mut self, holders: &[RigidHolder]) -> Result<(), SurfaceError> {
+        let checked = holders
+            .iter()
+            .map(HolderState::new)
+            .collect::<Result<Vec<_>, _>>()?;
+        self.holders = checked;
+        Ok(())
+    }
+
+    /// The impulse (N·s) the surface gave rigid holder `k` ([`MassSpringSurface::set_holders`])
+    /// in the last filtered step, and its moment about the holder's centre (N·m·s); surface
+    /// frame. The holder's velocity after the step is its velocity before plus its inverse
+    /// mass and inertia times these. `None` for no such holder.
+    pub fn holder_impulse(&self, k: usize) -> Option<(Vector, Vector)> {
+        self.holders
+            .get(k)
+            .map(|h| (h.impulse.as_vec3(), h.angular_impulse.as_vec3()))
     }
 
     /// How many points are held (see [`MassSpringSurface::press_point`]).
@@ -414,8 +487,8 @@ fn solve_presses(
     let (mu, active) = solve_pushing(
         a,
         &depth,
-        |i| !grasped(i),
-        |i| depth[i] > 0.0 || grasped(i),
+        (|i| !grasped(i), |i| depth[i] > 0.0 || grasped(i)),
+        &[],
         tol,
         factor,
     )?;
@@ -426,8 +499,8 @@ fn solve_presses(
     let (nu, _) = solve_pushing(
         &sub,
         &dv,
-        |r| !grasped(rows[r]),
-        |r| dv[r] > 0.0 || grasped(rows[r]),
+        (|r| !grasped(rows[r]), |r| dv[r] > 0.0 || grasped(rows[r])),
+        &[],
         vtol,
         factor,
     )?;

@@ -144,8 +144,9 @@ fn the_pushing_solve_finds_the_one_complementary_solution_from_any_start() {
                 _ => (i as u64 * 7 + seed).is_multiple_of(3),
             };
             let mut factor = Vec::new();
-            let (x, active) = solve_pushing(&a, &b, |i| !bilateral(i), guess, 1e-12, &mut factor)
-                .expect("a finite solution");
+            let (x, active) =
+                solve_pushing(&a, &b, (|i| !bilateral(i), guess), &[], 1e-12, &mut factor)
+                    .expect("a finite solution");
             for i in 0..m {
                 assert!(
                     (x[i] - want[i]).abs() <= 1e-8 * (1.0 + want[i].abs()),
