@@ -3,6 +3,7 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
+use super::dynamic_tools::{move_on, press_dynamic, set_holders, DynamicTool};
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{
     add_grasped, find_contacts, part_query, press_all, reaction_of, record_grasped,
@@ -54,6 +55,10 @@ pub(super) struct ToolMotion {
     pub grasp: bool,
     /// Whether to hand back the vertices it holds with their forces (for a haptic link).
     pub record: bool,
+    /// A dynamic tool's index in the substep's dynamic tools: it presses as the surface's
+    /// rigid holder of that index ([`super::dynamic_tools`]), and `start`/`end` are its pose now
+    /// and after a substep of free motion.
+    pub holder: Option<usize>,
 }
 
 /// Vertices a tool holds: each one's position and the force it puts on the tool (world).
@@ -63,19 +68,27 @@ pub(super) type HeldContacts = Vec<(Vector, Vector)>;
 /// each polyhedral tool presses its vertices and edges into the surface between the surface's
 /// vertices. Returns each tool's reaction (world): the holds' spring forces at the end of the
 /// substep plus the impulses the pressed points gave during it; and the vertices it holds,
-/// each with its position and force on the tool (world).
+/// each with its position and force on the tool (world). The dynamic tools (`dynamic`, the
+/// tools' `holder` indices) are the step's rigid holders: they take the surface's impulses
+/// and move on by the substep, and press what they will meet in the next one.
 pub(super) fn surface_substep(
     s: &mut AttachedSurface,
     world: &PhysicsWorld,
     body_pose: &Pose,
-    tools: &[ToolMotion],
+    (tools, dynamic): (&[ToolMotion], &mut [DynamicTool]),
     h: Real,
 ) -> Vec<(ColliderHandle, ToolReaction, HeldContacts)> {
     let inv = body_pose.inverse();
+    // The dynamic tools hold at their velocities now, with their masses (their holder
+    // indices are their places in `dynamic`; none clears the last step's holders).
+    set_holders(&mut s.surface, dynamic, &inv, 0.0);
     retarget_holds(&mut s.surface, &s.held_list, world, tools, &inv, h);
     s.surface.positions_into(&mut s.before);
     s.surface.step();
     record_impulses(&s.surface, &mut s.pressed);
+    let mut tools = tools.to_vec();
+    move_on(&mut s.surface, dynamic, &mut tools, body_pose, h);
+    let tools = &tools[..];
     std::mem::swap(&mut s.pressed, &mut s.last_pressed);
     s.pressed.clear();
     // Which vertices the tools held through this step: marked in `was_held` (all false but
@@ -92,6 +105,9 @@ pub(super) fn surface_substep(
     s.search.refresh(&mut s.surface, &s.scratch, &s.before);
     let mut out = Vec::with_capacity(tools.len());
     let mut now_held = Vec::new();
+    // The dynamic tools' vertex contacts, pressed with the sharp features' below.
+    let (mut vertex_presses, mut vertex_velocities, mut vertex_owners) =
+        (Vec::new(), Vec::new(), Vec::new());
     s.search.clear_tools();
     s.search
         .retain_tools(|h| tools.iter().any(|t| t.handle == h));
@@ -119,6 +135,23 @@ pub(super) fn surface_substep(
             .is_none_or(|b| !b.is_dynamic());
         let friction = friction_on(s, t);
         let shape = t.shape.query.as_deref().unwrap_or(tool.shape());
+        if let Some(j) = t.holder {
+            let reaction = press_dynamic(
+                s,
+                (t, k, j),
+                (shape, parts, friction),
+                dynamic,
+                body_pose,
+                h,
+                (
+                    &mut vertex_presses,
+                    &mut vertex_velocities,
+                    &mut vertex_owners,
+                ),
+            );
+            out.push((t.handle, reaction, Vec::new()));
+            continue;
+        }
         let pose = inv * t.end;
         // Candidates, from one walk of the BVH: the vertices near the tool, those held
         // through the step (which may chase it from farther), and the triangles its sharp
@@ -177,17 +210,28 @@ pub(super) fn surface_substep(
     now_held.sort_unstable();
     now_held.dedup();
     s.held_list = now_held;
-    if tools.iter().any(|t| !t.shape.parts.is_empty()) {
+    if !vertex_presses.is_empty() || tools.iter().any(|t| !t.shape.parts.is_empty()) {
         s.surface.positions_into(&mut s.scratch);
         // The holds moved the vertices they hold: the triangles around those that went
         // past the BVH's slack join the candidates.
         s.search.refresh(&mut s.surface, &s.scratch, &s.before);
         s.search.add_moved_triangles();
         s.contacts.clear();
-        let (mut velocities, mut owners, mut kept) = (Vec::new(), Vec::new(), Vec::new());
+        s.contacts.append(&mut vertex_presses);
+        let (mut velocities, mut owners, mut kept) = (vertex_velocities, vertex_owners, Vec::new());
         for (k, t) in tools.iter().enumerate() {
             let friction = friction_on(s, t);
             for (local, mesh) in &t.shape.parts {
+                let first = s.contacts.len();
+                // A dynamic tool's motion is the next substep's, predicted: the surface
+                // stands still in it, and each contact is pressed at its depth now (the
+                // tool's motion to the predicted pose taken off: negative, a speculative
+                // contact).
+                let before = if t.holder.is_some() {
+                    &s.scratch
+                } else {
+                    &s.before
+                };
                 find_contacts(
                     s.surface.triangles(),
                     (s.search.triangles_of_tool(k), &mut kept),
@@ -195,15 +239,21 @@ pub(super) fn surface_substep(
                     &(inv * t.start * *local),
                     &(inv * t.end * *local),
                     h,
-                    &s.before,
+                    before,
                     &s.scratch,
                     &mut s.contacts,
                     &mut velocities,
                 );
+                if t.holder.is_some() {
+                    for (c, v) in s.contacts[first..].iter_mut().zip(&velocities[first..]) {
+                        c.depth -= h * v.dot(c.normal);
+                    }
+                }
                 let owner = PressOwner {
                     tool: t.handle,
                     friction,
                     grasp: t.grasp,
+                    holder: t.holder,
                 };
                 owners.resize(s.contacts.len(), owner);
             }
@@ -212,7 +262,7 @@ pub(super) fn surface_substep(
         let graspers: Vec<Grasper> = tools
             .iter()
             .filter(|t| t.grasp)
-            .map(|t| (t.handle, inv * t.start, inv * t.end))
+            .map(|t| (t.handle, inv * t.start, inv * t.end, t.holder))
             .collect();
         let first_grasped = add_grasped(
             &mut s.grasped,
@@ -223,6 +273,18 @@ pub(super) fn surface_substep(
             &mut velocities,
             &mut owners,
         );
+        // A dynamic tool's contacts that overlap by less than its slop are pressed as
+        // touching, the rest by what passes the slop: moving a vertex that carries a load out
+        // by `d` does work `F d` the body never paid for (a ball resting on the edges round a
+        // vertex overlapped them by 20 µm at every substep, and the energy that added kept it
+        // sliding about the dent).
+        for (c, o) in s.contacts.iter_mut().zip(&owners) {
+            if let Some(d) = o.holder.and_then(|j| dynamic.get(j)) {
+                if c.depth > 0.0 {
+                    c.depth = (c.depth - d.slop).max(0.0);
+                }
+            }
+        }
         let ids = press_all(
             &mut s.surface,
             &s.contacts,

@@ -2,6 +2,7 @@
 //! to rigid bodies, gives them colliders that follow the deformation, lets any number of rigid
 //! tools press into them, and returns each tool's reaction force (two-way for dynamic tools).
 
+mod dynamic_tools;
 mod events;
 mod friction;
 mod haptic_links;

@@ -42,6 +42,8 @@ pub(super) struct PressOwner {
     pub friction: Friction,
     /// Whether the tool grasps (its points are held in every direction).
     pub grasp: bool,
+    /// A dynamic tool's index among the surface's rigid holders ([`super::dynamic_tools`]).
+    pub holder: Option<usize>,
 }
 
 /// Reads the impulses the holds of `pressed` gave up to the end of the surface step just taken
@@ -165,7 +167,7 @@ pub(super) fn press_all(
             depth: c.depth,
             normal_velocity: v.dot(c.normal),
             tangential: friction_of(v, owner),
-            holder: None,
+            holder: owner.holder.map(|k| (k, c.point)),
         })
         .collect();
     // The geometry layer's contacts are finite, with weights on existing vertices: an error
@@ -232,8 +234,8 @@ impl GraspedPoint {
 }
 
 /// A grasping tool over the substep (surface frame): its collider, its poses at the start and
-/// the end.
-pub(super) type Grasper = (ColliderHandle, Pose, Pose);
+/// the end, and its index among the surface's rigid holders if it is dynamic.
+pub(super) type Grasper = (ColliderHandle, Pose, Pose, Option<usize>);
 
 /// Appends the grasped points of the tools still grasping (`graspers`) to the contacts, each
 /// pressed onto its material point with that point's velocity (plus what closes its
@@ -272,7 +274,7 @@ pub(super) fn add_grasped(
     }
     let first = contacts.len();
     for g in grasped.iter() {
-        let Some((_, start, end)) = graspers.iter().find(|t| t.0 == g.tool) else {
+        let Some(&(_, start, end, holder)) = graspers.iter().find(|t| t.0 == g.tool) else {
             continue;
         };
         let material = end.transform_point(g.local);
@@ -304,6 +306,7 @@ pub(super) fn add_grasped(
             tool: g.tool,
             friction: Friction::NONE,
             grasp: true,
+            holder,
         });
     }
     first
@@ -326,7 +329,7 @@ pub(super) fn record_grasped(
         if grasped.iter().any(|g| g.shares_a_vertex(c)) {
             continue;
         }
-        let Some((_, _, end)) = graspers.iter().find(|t| t.0 == o.tool) else {
+        let Some((_, _, end, _)) = graspers.iter().find(|t| t.0 == o.tool) else {
             continue;
         };
         grasped.push(GraspedPoint {

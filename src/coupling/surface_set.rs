@@ -1,5 +1,6 @@
 //! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
 
+use super::dynamic_tools::{DynamicTool, MotionChange};
 use super::events::{ToolTouchEvent, TouchTracker};
 use super::friction::{Friction, Sticks};
 use super::haptic_links::LinkState;
@@ -128,7 +129,8 @@ pub struct ToolReaction {
     pub force: Vector,
     /// Torque of those forces about the tool body's centre of mass (N·m, world frame).
     pub torque: Vector,
-    /// The force averaged over the rigid step's substeps (N): what a dynamic tool receives.
+    /// The force averaged over the rigid step's substeps (N): for a dynamic tool, the impulse
+    /// the surfaces gave it over the step, over the step's length.
     pub mean_force: Vector,
     /// Number of surface vertices the tool holds.
     pub held_vertices: usize,
@@ -204,8 +206,6 @@ impl AttachedSurface {
 pub(super) struct ToolState {
     prev: Option<Pose>,
     pub(super) reaction: ToolReaction,
-    /// The force and torque this set currently adds to the tool's body.
-    applied: (Vector, Vector),
     /// The device pose of the last haptic step.
     haptic_prev: Option<Pose>,
     /// Whether the tool's solver-group filter held [`SURFACE_SOLVER_GROUP`] before
@@ -243,17 +243,23 @@ pub(super) struct ToolState {
 /// kinetic friction for those that slip; plus the impulses of the points it presses between
 /// vertices (normal, and with friction tangential: [`crate::surface::Tangential`]). A
 /// grasping tool also holds those points, in every direction, until it lets go.
-/// Dynamic tools carry the substep-averaged reaction as a rapier force through the next rigid
-/// step (one step of lag), and surface colliders are updated once per rigid step
-/// (`TriMesh::set_vertices`, a BVH refit).
+/// Dynamic tools are coupled implicitly ([`crate::surface::RigidHolder`]): rapier moves them
+/// first (gravity, your forces, their other contacts); then each surface replays the rigid
+/// step from their poses at its start, the body's mass entering every substep's constraint
+/// solve, and the body takes the pose and velocity the surfaces leave it (with its colliders,
+/// so ray casts see it there). A dynamic tool presses the surface vertices inside it or within
+/// its reach over the next substep, the points of the triangles nearest it or deepest in it
+/// (parry's contact query) and, for a polyhedral tool, its own vertices and edges; a point
+/// short of it is a speculative contact, which may close its gap, not pass it, and one that
+/// overlaps it by less than a thousandth of its size is held where it is, not pushed out.
+/// Surface colliders are updated once per rigid step (`TriMesh::set_vertices`, a BVH refit).
 ///
 /// # Limitations
-/// - A dynamic tool's mass does not enter the surface's solve: the surface moves the vertices
-///   it holds as a kinematic tool would, and the body gets the reaction a step later. Near
-///   the mass and stiffness of `tests/it/coupling.rs` a dropped ball settles; far from it a
-///   light body is flung off (1 g and 30 g balls left a plate at up to 360 times their
-///   impact speed) and a heavy one goes through (`tests/it/dynamic_drops.rs`, a known
-///   failure).
+/// - A dynamic tool touching two surfaces in one step gets the sum of what each changed of its
+///   motion, each surface solving as if the other were not there. Its friction, like a
+///   kinematic tool's, is [`SurfaceSet::set_tool_friction`]'s, not its collider's. A body
+///   on a surface is woken every step (the surface's impulses reach it), so it never sleeps.
+///   The haptic path ([`SurfaceSet::haptic_step`]) holds dynamic tools where they are.
 /// - Curved tools load the surface's vertices only (mesh it finer than a ball). Polyhedral
 ///   tools also press their vertices and edges between the surface's vertices, next to a
 ///   vertex they hold too, except points with less than a quarter of their weight off the

@@ -16,6 +16,7 @@ mod motion;
 mod reconstruction;
 mod shape_cast;
 mod shapes;
+pub(crate) mod solid_contacts;
 mod surface_bvh;
 mod surface_contact;
 pub(crate) mod tool_boundary;

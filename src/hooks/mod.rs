@@ -32,6 +32,7 @@ mod sets;
 mod step_motion;
 mod touch_hooks;
 mod touch_pipeline;
+pub(crate) use touch_pipeline::pose_sync::sync_moved_colliders;
 
 pub use events::PairTouchEvent;
 #[cfg(feature = "bevy")]

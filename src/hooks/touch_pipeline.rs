@@ -27,7 +27,7 @@ mod guard;
 mod hook_flags;
 mod movers;
 mod pair_view;
-mod pose_sync;
+pub(crate) mod pose_sync;
 mod rapier_contacts;
 
 use pair_view::PairState;

@@ -18,9 +18,9 @@ use rapier3d::prelude::*;
 ///
 /// **Ball.** A rapier dynamic ball, r = 30 mm and 0.1 kg, registered with
 /// [`SurfaceSet::add_tool`], released at rest with its centre 100 mm above the plate (4 mm and
-/// 3 mm off its centre) under gravity (9.81 m/s², 60 Hz rigid steps). The surface's force on
-/// the ball, averaged over the substeps of a step, reaches it as a rapier force in the next
-/// step. The run lasts 5 s ([`Self::END_TIME`]).
+/// 3 mm off its centre) under gravity (9.81 m/s², 60 Hz rigid steps). The ball's mass meets
+/// the plate's in each substep's constraint solve (implicit coupling, [`SurfaceSet`]'s docs).
+/// The run lasts 5 s ([`Self::END_TIME`]).
 ///
 /// ```
 /// use rapier_touch::scenes::BallOnPlateScene;

@@ -1,5 +1,5 @@
 //! Stepping a set: the haptic path, the main loop's step around rapier's, and the surfaces'
-//! substeps with the tools' reactions and forces on dynamic tools.
+//! substeps with the tools' reactions and the dynamic tools moved by them.
 
 use super::*;
 
@@ -36,6 +36,7 @@ impl SurfaceSet {
                     friction: t.friction,
                     grasp: t.grasp,
                     record: false,
+                    holder: None,
                 })
             })
             .chain(std::iter::once(ToolMotion {
@@ -46,13 +47,14 @@ impl SurfaceSet {
                 friction,
                 grasp,
                 record: false,
+                holder: None,
             }))
             .collect();
         let mut total = ToolReaction::default();
         let mut held = Vec::new();
         for (_, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let h = s.surface.dt();
-            for (th, r, contacts) in surface_substep(s, world, &body_pose, &others, h) {
+            for (th, r, contacts) in surface_substep(s, world, &body_pose, (&others, &mut []), h) {
                 if th == tool {
                     held.extend(contacts);
                     total.force += r.force;
@@ -99,16 +101,17 @@ impl SurfaceSet {
         }
     }
 
-    /// The surface part of a step: substeps with the tools' poses interpolated from the
-    /// recorded start poses to their current ones, reactions, impulses on dynamic tools, and
-    /// collider updates.
+    /// The surface part of a step: substeps with the kinematic tools' poses interpolated from
+    /// the recorded start poses to their current ones and the dynamic tools moving under the
+    /// surfaces' impulses ([`crate::coupling::dynamic_tools`]), reactions, and collider
+    /// updates.
     pub(crate) fn step_surfaces(&mut self, world: &mut PhysicsWorld) {
         let dt = world.integration_parameters.dt;
         for t in self.tools.values_mut() {
             t.reaction = ToolReaction::default();
             t.held.clear();
         }
-        let tool_list: Vec<ToolMotion> = self
+        let mut tool_list: Vec<ToolMotion> = self
             .tools
             .iter()
             .filter_map(|(h, t)| {
@@ -122,30 +125,53 @@ impl SurfaceSet {
                     friction: t.friction,
                     grasp: t.grasp,
                     record: self.links.contains_key(h),
+                    holder: None,
                 })
             })
             .collect();
+        // The dynamic tools at the start of the rigid step, with rapier's new velocities.
+        let dynamic: Vec<DynamicTool> = tool_list
+            .iter()
+            .filter_map(|t| DynamicTool::new(world, t.handle, t.start))
+            .collect();
+        for (j, d) in dynamic.iter().enumerate() {
+            if let Some(t) = tool_list.iter_mut().find(|t| t.handle == d.collider) {
+                t.holder = Some(j);
+            }
+        }
+        let mut changes = vec![MotionChange::default(); dynamic.len()];
         let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
         let mut touching = self.touch.take_spare();
         for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
             let h = dt / n as Real;
+            let mut states = dynamic.clone();
             for k in 1..=n {
+                for d in states.iter_mut() {
+                    d.fall(h);
+                }
                 let a = k as Real / n as Real;
                 let a_prev = (k - 1) as Real / n as Real;
                 let poses: Vec<ToolMotion> = tool_list
                     .iter()
-                    .map(|t| ToolMotion {
-                        handle: t.handle,
-                        start: lerp_pose(&t.start, &t.end, a_prev),
-                        end: lerp_pose(&t.start, &t.end, a),
-                        shape: t.shape.clone(),
-                        friction: t.friction,
-                        grasp: t.grasp,
-                        record: t.record,
+                    .map(|t| {
+                        let (start, end) = match t.holder.and_then(|j| states.get(j)) {
+                            Some(d) => (d.collider_pose(), d.predicted(h)),
+                            None => (
+                                lerp_pose(&t.start, &t.end, a_prev),
+                                lerp_pose(&t.start, &t.end, a),
+                            ),
+                        };
+                        ToolMotion {
+                            start,
+                            end,
+                            shape: t.shape.clone(),
+                            ..*t
+                        }
                     })
                     .collect();
-                for (th, r, contacts) in surface_substep(s, world, &body_pose, &poses, h) {
+                let substep = surface_substep(s, world, &body_pose, (&poses, &mut states), h);
+                for (th, r, contacts) in substep {
                     let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
                     m.0 += r.force / n as Real;
                     m.1 += r.torque / n as Real;
@@ -164,6 +190,12 @@ impl SurfaceSet {
                     }
                 }
             }
+            // What the surface changed of each dynamic tool's motion.
+            for ((start, end), change) in dynamic.iter().zip(&states).zip(changes.iter_mut()) {
+                if end.touched {
+                    change.add(start, end, h, n);
+                }
+            }
         }
         crate::coupling::events::update(&mut self.touch, touching);
         // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step).
@@ -180,30 +212,25 @@ impl SurfaceSet {
                 }
             }
         }
-        // Two-way coupling: dynamic tools carry the averaged reaction as a rapier force during
-        // the next rigid step (one step of lag). The crate's previous contribution is replaced,
-        // the user's own forces on the body are left alone.
         for (th, t) in self.tools.iter_mut() {
-            let (f, tq) = mean
-                .get(th)
-                .copied()
-                .unwrap_or((Vector::ZERO, Vector::ZERO));
-            t.reaction.mean_force = f;
-            let (f, tq) = if f.is_finite() && tq.is_finite() {
-                (f, tq)
-            } else {
-                (Vector::ZERO, Vector::ZERO)
-            };
-            let Some(parent) = world.colliders.get(*th).and_then(|c| c.parent()) else {
+            t.reaction.mean_force = mean.get(th).map_or(Vector::ZERO, |m| m.0);
+        }
+        // Two-way coupling: the dynamic tools the surfaces touched take the motion they left
+        // (their free motion at rapier's new velocity, changed by what each surface changed),
+        // their colliders with them.
+        let mut moved = Vec::new();
+        for (d, change) in dynamic.iter().zip(&changes) {
+            let (Some((pose, v, w)), Some(b)) = (change.motion(), world.bodies.get_mut(d.body))
+            else {
                 continue;
             };
-            if let Some(b) = world.bodies.get_mut(parent) {
-                if b.is_dynamic() {
-                    b.add_force(f - t.applied.0, true);
-                    b.add_torque(tq - t.applied.1, true);
-                    t.applied = (f, tq);
-                }
+            if pose.is_finite() && v.is_finite() && w.is_finite() {
+                b.set_position(pose, true);
+                b.set_linvel(v, true);
+                b.set_angvel(w, true);
+                moved.push(d.body);
             }
         }
+        crate::hooks::sync_moved_colliders(world, &mut moved);
     }
 }

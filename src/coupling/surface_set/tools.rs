@@ -49,7 +49,6 @@ impl SurfaceSet {
             ToolState {
                 prev: None,
                 reaction: ToolReaction::default(),
-                applied: (Vector::ZERO, Vector::ZERO),
                 haptic_prev: None,
                 had_surface_group,
                 shape,
@@ -61,8 +60,8 @@ impl SurfaceSet {
         Ok(())
     }
 
-    /// Stops treating `tool` as a tool: the vertices it held are released, the force and
-    /// torque the set added to its body are taken back, and its solver-group filter gets
+    /// Stops treating `tool` as a tool: the vertices it held are released, and its
+    /// solver-group filter gets
     /// [`SURFACE_SOLVER_GROUP`] back if it had it before [`SurfaceSet::add_tool`] (so rapier
     /// solves its contacts with the surfaces' colliders again). A tool whose collider left the
     /// world is simply forgotten.
@@ -85,13 +84,6 @@ impl SurfaceSet {
                 g.filter | SURFACE_SOLVER_GROUP,
                 g.test_mode,
             ));
-        }
-        let parent = c.parent();
-        if let Some(b) = parent.and_then(|p| world.bodies.get_mut(p)) {
-            if b.is_dynamic() && state.applied != (Vector::ZERO, Vector::ZERO) {
-                b.add_force(-state.applied.0, true);
-                b.add_torque(-state.applied.1, true);
-            }
         }
     }
 

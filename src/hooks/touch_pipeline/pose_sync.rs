@@ -6,7 +6,7 @@ use super::*;
 /// Puts the colliders of the bodies the guard moved where their bodies now are, and their
 /// broad-phase boxes with them, so renderers, ray casts and the query pipeline see the
 /// corrected poses right after the step (rapier would only sync them at the next step).
-pub(super) fn sync_moved_colliders(world: &mut PhysicsWorld, moved: &mut Vec<RigidBodyHandle>) {
+pub(crate) fn sync_moved_colliders(world: &mut PhysicsWorld, moved: &mut Vec<RigidBodyHandle>) {
     if moved.is_empty() {
         return;
     }

@@ -1,0 +1,347 @@
+//! Dynamic tools, coupled implicitly: a dynamic body pressing a surface is a rigid holder of
+//! the surface's constraint solve ([`crate::surface::RigidHolder`]), so its mass meets the
+//! surface's in the same substep instead of a force handed to it a rigid step later.
+//!
+//! Over a rigid step, rapier moves the body first (gravity, the user's forces, its other
+//! contacts). Each surface then replays the step in its substeps from the body's pose at the
+//! start with rapier's new velocity: before each substep the body is the surface's holder at
+//! its current velocity, the step's solve gives it the surface's impulses, and it moves on with
+//! the velocity they leave. The points it will meet in the next substep are pressed at its
+//! pose then: surface vertices it holds or will reach (speculative contacts: such a point may
+//! close its gap, not pass the body) and its own vertices and edges crossing the surface. At
+//! the end of the rigid step the body takes the pose and velocity the surfaces left it
+//! (several surfaces add what each changed). A body no surface touched keeps rapier's pose.
+
+use super::friction::Friction;
+use super::holding::ToolMotion;
+use super::pressing::{reaction_of, PressOwner};
+use super::surface_set::{AttachedSurface, ToolReaction};
+use super::tool_shape::contact_margin;
+use crate::geometry::solid_contacts::{triangle_contacts, vertex_contacts};
+use crate::geometry::SurfaceContact;
+use crate::math::{Matrix, Pose, Real, Rotation, Vector};
+use crate::surface::{MassSpringSurface, RigidHolder};
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::shape::Shape;
+use rapier3d::dynamics::RigidBodyHandle;
+use rapier3d::geometry::ColliderHandle;
+use rapier3d::pipeline::PhysicsWorld;
+
+/// A dynamic tool's rigid state while the surfaces step (world frame).
+#[derive(Copy, Clone, Debug)]
+pub(super) struct DynamicTool {
+    pub collider: ColliderHandle,
+    pub body: RigidBodyHandle,
+    /// The collider's pose in the body's frame.
+    local: Pose,
+    /// The body's pose.
+    pub pose: Pose,
+    /// The centre of mass in the body's frame.
+    local_com: Vector,
+    /// Velocity of the centre of mass, and angular velocity.
+    pub linvel: Vector,
+    pub angvel: Vector,
+    /// Inverse mass per world axis (zero on locked axes) and world inverse inertia.
+    inverse_mass: Vector,
+    inverse_inertia: Matrix,
+    /// The gravity on it (the world's, scaled by its gravity scale; zero when asleep).
+    gravity: Vector,
+    /// Whether a surface gave it an impulse in this rigid step.
+    pub touched: bool,
+    /// How far it may overlap the surface without being pushed out ([`SLOP`] of its size).
+    pub slop: Real,
+}
+
+/// A dynamic tool's allowed overlap with a surface, as a fraction of its size: within it a
+/// contact is held where it is, not pushed out (rapier's `allowed_linear_error` does the same
+/// for rigid contacts, 1 mm by default).
+pub(super) const SLOP: Real = 1e-3;
+
+impl DynamicTool {
+    /// The tool on collider `collider` if its body is dynamic: at `start` (the collider's pose
+    /// before the rigid step) with the velocity rapier gave the body in it, less the gravity
+    /// rapier added (the substeps add it back a substep at a time, [`Self::fall`]: added at
+    /// once, a body resting on a surface was knocked down at the start of every rigid step and
+    /// pushed back up through its substeps, a millimetre's bounce at 60 Hz).
+    pub fn new(world: &PhysicsWorld, collider: ColliderHandle, start: Pose) -> Option<Self> {
+        let c = world.colliders.get(collider)?;
+        let body = c.parent()?;
+        let b = world.bodies.get(body)?;
+        if !b.is_dynamic() {
+            return None;
+        }
+        let local = *c.position_wrt_parent()?;
+        let m = b.mass_properties();
+        let w = &m.effective_world_inv_inertia;
+        let inverse_inertia = Matrix::from_cols(
+            Vector::new(w.m11, w.m12, w.m13),
+            Vector::new(w.m12, w.m22, w.m23),
+            Vector::new(w.m13, w.m23, w.m33),
+        );
+        let gravity = if b.is_sleeping() {
+            Vector::ZERO
+        } else {
+            world.gravity * b.gravity_scale()
+        };
+        let dt = world.integration_parameters.dt;
+        let tool = DynamicTool {
+            collider,
+            body,
+            local,
+            pose: start * local.inverse(),
+            local_com: m.local_mprops.local_com,
+            linvel: b.linvel() - gravity * dt,
+            angvel: b.angvel(),
+            inverse_mass: m.effective_inv_mass,
+            inverse_inertia,
+            gravity,
+            touched: false,
+            slop: SLOP * c.compute_aabb().extents().max_element(),
+        };
+        (tool.pose.is_finite() && tool.linvel.is_finite() && tool.angvel.is_finite())
+            .then_some(tool)
+    }
+
+    /// Gravity's velocity over `h` seconds.
+    pub fn fall(&mut self, h: Real) {
+        self.linvel += self.gravity * h;
+    }
+
+    /// Free motion over `n` substeps of `h`: falling and moving on.
+    pub fn free(&self, h: Real, n: u32) -> Self {
+        let mut t = *self;
+        for _ in 0..n {
+            t.fall(h);
+            t.advance(h);
+        }
+        t
+    }
+
+    /// The collider's pose.
+    pub fn collider_pose(&self) -> Pose {
+        self.pose * self.local
+    }
+
+    /// The collider's pose after `h` seconds of free motion (falling).
+    pub fn predicted(&self, h: Real) -> Pose {
+        self.free(h, 1).collider_pose()
+    }
+
+    /// Moves the body on by `h` seconds at its velocity (about its centre of mass).
+    pub fn advance(&mut self, h: Real) {
+        let com = self.pose.transform_point(self.local_com);
+        let turn = Rotation::from_scaled_axis(self.angvel * h);
+        let rotation = (turn * self.pose.rotation).normalize();
+        let next = Pose::from_parts(com + self.linvel * h - rotation * self.local_com, rotation);
+        if next.is_finite() {
+            self.pose = next;
+        }
+    }
+
+    /// The body as the surface's holder, in the surface's frame (`to_surface`: world to
+    /// surface).
+    pub fn holder(&self, to_surface: &Pose) -> RigidHolder {
+        let r = Matrix::from_quat(to_surface.rotation);
+        RigidHolder {
+            inverse_mass: r * Matrix::from_diagonal(self.inverse_mass) * r.transpose(),
+            inverse_inertia: r * self.inverse_inertia * r.transpose(),
+            centre: to_surface.transform_point(self.pose.transform_point(self.local_com)),
+            velocity: to_surface.rotation * self.linvel,
+            angular_velocity: to_surface.rotation * self.angvel,
+        }
+    }
+
+    /// Takes an impulse and its moment about the centre of mass (world).
+    pub fn take(&mut self, impulse: Vector, angular: Vector) {
+        if !(impulse.is_finite() && angular.is_finite()) {
+            return;
+        }
+        if impulse != Vector::ZERO || angular != Vector::ZERO {
+            self.touched = true;
+        }
+        self.linvel += self.inverse_mass * impulse;
+        self.angvel += self.inverse_inertia * angular;
+    }
+
+    /// The centre of mass (world).
+    pub fn centre(&self) -> Vector {
+        self.pose.transform_point(self.local_com)
+    }
+}
+
+/// What one or more surfaces changed of a dynamic tool's motion over a rigid step: against
+/// the same substeps of free motion, its velocities, its centre's position and its rotation;
+/// and that free motion's end, of the first surface that touched it.
+#[derive(Copy, Clone, Debug, Default)]
+pub(super) struct MotionChange {
+    free: Option<DynamicTool>,
+    linvel: Vector,
+    angvel: Vector,
+    translation: Vector,
+    rotation: Rotation,
+}
+
+impl MotionChange {
+    /// Adds what a surface left of `start` after `n` substeps of `h` (`end`).
+    pub fn add(&mut self, start: &DynamicTool, end: &DynamicTool, h: Real, n: u32) {
+        let free = start.free(h, n);
+        self.free.get_or_insert(free);
+        self.linvel += end.linvel - free.linvel;
+        self.angvel += end.angvel - free.angvel;
+        self.translation += end.centre() - free.centre();
+        self.rotation = (end.pose.rotation * free.pose.rotation.inverse()) * self.rotation;
+    }
+
+    /// The body's pose, velocity and angular velocity with the changes, or `None` when no
+    /// surface touched it. From its free motion at rapier's new velocity, not from rapier's
+    /// pose: that moved by the velocities of rapier's solver substeps, which gravity changed
+    /// (a body resting on a surface gained 3/8 g dt² a step against the free motion the
+    /// surfaces replayed, 1 mm at 60 Hz).
+    pub fn motion(&self) -> Option<(Pose, Vector, Vector)> {
+        let free = self.free?;
+        let com = free.centre() + self.translation;
+        let rotation = (self.rotation * free.pose.rotation).normalize();
+        Some((
+            Pose::from_parts(com - rotation * free.local_com, rotation),
+            free.linvel + self.linvel,
+            free.angvel + self.angvel,
+        ))
+    }
+}
+
+/// Makes the dynamic tools the surface's rigid holders (index: place in `dynamic`), in the
+/// surface's frame (`to_surface`), at their velocities after `fall` seconds of gravity.
+pub(super) fn set_holders(
+    surface: &mut MassSpringSurface,
+    dynamic: &[DynamicTool],
+    to_surface: &Pose,
+    fall: Real,
+) {
+    let holders: Vec<RigidHolder> = dynamic
+        .iter()
+        .map(|d| {
+            let mut next = *d;
+            next.fall(fall);
+            next.holder(to_surface)
+        })
+        .collect();
+    // Checked on the way in: finite poses and velocities, rapier's mass properties.
+    let _ = surface.set_holders(&holders);
+}
+
+/// After a surface step of `h`: each dynamic tool takes the surface's impulses (surface frame,
+/// the surface's body at `body_pose`) and moves on by the substep with what they leave; its
+/// motion in `tools` becomes the next substep's, free; and the surface's holders become the
+/// tools over that substep, for the presses to come. Those are relative to the holders'
+/// velocities then (having fallen for a substep: the contacts' velocities are those of the
+/// same free motion; against the velocity now, a resting body floated a substep's fall above
+/// its contacts).
+pub(super) fn move_on(
+    surface: &mut MassSpringSurface,
+    dynamic: &mut [DynamicTool],
+    tools: &mut [ToolMotion],
+    body_pose: &Pose,
+    h: Real,
+) {
+    for (j, d) in dynamic.iter_mut().enumerate() {
+        if let Some((impulse, angular)) = surface.holder_impulse(j) {
+            d.take(body_pose.rotation * impulse, body_pose.rotation * angular);
+        }
+        d.advance(h);
+        for t in tools.iter_mut().filter(|t| t.holder == Some(j)) {
+            t.start = d.collider_pose();
+            t.end = d.predicted(h);
+        }
+    }
+    if !dynamic.is_empty() {
+        set_holders(surface, dynamic, &body_pose.inverse(), h);
+    }
+}
+
+/// Dynamic tool `t` (the substep's tool `k`, holder `j`; its query `shape`, the box of its
+/// sharp features' reach `parts` and its `friction`) against surface `s`: the surface
+/// vertices and triangle points it holds or may reach over the next substep, at its pose now
+/// ([`crate::geometry::solid_contacts`]), appended to `out` (contacts, the tool's velocities
+/// there, owners). Returns its reaction from the points it pressed in the step just taken.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn press_dynamic(
+    s: &mut AttachedSurface,
+    (t, k, j): (&ToolMotion, usize, usize),
+    (shape, parts, friction): (&dyn Shape, Option<Aabb>, Friction),
+    dynamic: &[DynamicTool],
+    body_pose: &Pose,
+    h: Real,
+    (contacts, velocities, owners): (
+        &mut Vec<SurfaceContact>,
+        &mut Vec<Vector>,
+        &mut Vec<PressOwner>,
+    ),
+) -> ToolReaction {
+    let inv = body_pose.inverse();
+    let (start, end) = (inv * t.start, inv * t.end);
+    let aabb = shape.compute_aabb(&start).merged(&shape.compute_aabb(&end));
+    let margin = contact_margin(&aabb, 1e-4);
+    // The box over its motion holds what it may reach (a vertex fast enough to come from
+    // farther is pressed out when it is in).
+    let near = aabb.loosened(2.0 * margin);
+    s.search
+        .near(k, t.handle, &parts.map_or(near, |p| p.merged(&near)));
+    let material = |q: Vector| {
+        let local = start.inverse_transform_point(q);
+        (end.transform_point(local) - q) / h
+    };
+    let surface = &s.surface;
+    let first = contacts.len();
+    vertex_contacts(
+        shape,
+        &start,
+        material,
+        h,
+        (&s.search.vertices, &s.scratch, |i| surface.velocity(i)),
+        margin,
+        contacts,
+        velocities,
+    );
+    let depths: Vec<(u32, Real)> = contacts[first..]
+        .iter()
+        .map(|c| (c.surface[0].0, c.depth))
+        .collect();
+    let vertex_depth = |v: u32| depths.iter().find(|d| d.0 == v).map(|d| d.1);
+    triangle_contacts(
+        shape,
+        &start,
+        material,
+        h,
+        (
+            surface.triangles(),
+            s.search.triangles_of_tool(k),
+            &s.scratch,
+            |i| surface.velocity(i),
+        ),
+        vertex_depth,
+        (margin, dynamic.get(j).map_or(margin, |d| d.slop)),
+        contacts,
+        velocities,
+    );
+    owners.resize(
+        contacts.len(),
+        PressOwner {
+            tool: t.handle,
+            friction,
+            grasp: t.grasp,
+            holder: Some(j),
+        },
+    );
+    let (pf, pm, pn) = reaction_of(&s.last_pressed, t.handle, h);
+    let force = body_pose.rotation * pf;
+    let centre = dynamic.get(j).map_or(t.end.translation, |d| d.centre());
+    ToolReaction {
+        force,
+        // About the centre of mass: Σ (p - c) × f, in world.
+        torque: body_pose.rotation * pm - (centre - body_pose.translation).cross(force),
+        mean_force: force,
+        held_vertices: 0,
+        sticking_vertices: 0,
+        pressed_points: pn,
+    }
+}
