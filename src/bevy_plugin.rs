@@ -492,10 +492,15 @@ fn register(
 
 /// The start-of-step records (body and tool poses), then the haptic tools to their proxies.
 fn before_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
-    let Ok((_, mut colliders, _, mut bodies, _)) = context.single_mut() else {
+    let Ok((sim, mut colliders, _, mut bodies, _)) = context.single_mut() else {
         return;
     };
     let touch = &mut *touch;
+    touch.surfaces.take_coming_tools(
+        &bodies.bodies,
+        &mut colliders.colliders,
+        sim.integration_parameters.dt,
+    );
     touch.prev = Some(
         touch
             .pipeline

@@ -15,9 +15,10 @@ use parry3d::shape::{SharedShape, TriMeshFlags};
 use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderBuilder, ColliderHandle, ColliderSet, Group, InteractionGroups};
 use rapier3d::pipeline::PhysicsWorld;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
+mod auto_tools;
 mod stepping;
 mod tools;
 
@@ -59,6 +60,10 @@ pub enum CouplingError {
     /// parry rejected the surface's triangle mesh.
     #[error("the surface mesh cannot be a collider: {0}")]
     Collider(String),
+    /// The surface has no collider ([`AttachOptions::collider`]), which
+    /// [`SurfaceSet::set_auto_tools`] needs.
+    #[error("the surface has no collider")]
+    NoCollider,
     /// A haptic tool must be kinematic or have no body: a dynamic body's motion is rapier's,
     /// not the device's ([`SurfaceSet::connect_haptic`]).
     #[error("a haptic tool cannot be on a dynamic body")]
@@ -168,6 +173,8 @@ pub struct AttachedSurface {
     pub(super) grasped: Vec<GraspedPoint>,
     /// Friction of given tools on this surface, in place of the tool's own.
     pub(super) pair_friction: HashMap<ColliderHandle, Friction>,
+    /// Whether any dynamic body about to touch it becomes a tool ([`SurfaceSet::set_auto_tools`]).
+    pub(super) auto_tools: bool,
 }
 
 impl std::fmt::Debug for AttachedSurface {
@@ -324,6 +331,8 @@ pub struct SurfaceSet {
     touch: TouchTracker,
     /// Tools driven by servo loops ([`SurfaceSet::connect_haptic`]).
     pub(super) links: HashMap<ColliderHandle, LinkState>,
+    /// The tools [`SurfaceSet::set_auto_tools`] registered (not the user's).
+    pub(super) auto: HashSet<ColliderHandle>,
 }
 
 impl std::fmt::Debug for SurfaceSet {
@@ -359,6 +368,7 @@ impl SurfaceSet {
             tools: HashMap::new(),
             touch: TouchTracker::default(),
             links: HashMap::new(),
+            auto: HashSet::new(),
         }
     }
 
@@ -418,6 +428,7 @@ impl SurfaceSet {
             sticks: Sticks::default(),
             grasped: Vec::new(),
             pair_friction: HashMap::default(),
+            auto_tools: false,
             contacts: Vec::new(),
             scratch: verts,
         };

@@ -1,5 +1,6 @@
 //! One integration-test binary (links once): a module per layer and claim.
 
+mod auto_tools;
 mod classic_loop;
 mod common;
 mod compare_scenes;

@@ -85,6 +85,8 @@ impl SurfaceSet {
         world: &mut PhysicsWorld,
         rigid_step: impl FnOnce(&mut PhysicsWorld),
     ) {
+        let dt = world.integration_parameters.dt;
+        self.take_coming_tools(&world.bodies, &mut world.colliders, dt);
         self.begin_step(&world.colliders);
         self.drive_haptic_tools(&mut world.bodies, &mut world.colliders);
         rigid_step(world);

@@ -6,14 +6,14 @@ use super::*;
 impl SurfaceSet {
     /// Registers collider `tool` as a tool pressing into every surface of the set.
     ///
-    /// Two things change on the tool, both undone by [`SurfaceSet::remove_tool`]:
-    /// - its solver-group filter loses [`SURFACE_SOLVER_GROUP`] (the group of the surfaces'
-    ///   colliders), so rapier's rigid contact with a surface's collider does not fight the
-    ///   surface's own response (rapier still reports the pair; it only stops solving it);
-    /// - from the next [`SurfaceSet::step`] on, the surfaces' reaction is added to its body's
-    ///   user force and torque (a dynamic body).
+    /// Its solver-group filter loses [`SURFACE_SOLVER_GROUP`] (the group of the surfaces'
+    /// colliders), so rapier's rigid contact with a surface's collider does not fight the
+    /// surface's own response (rapier still reports the pair; it only stops solving it);
+    /// [`SurfaceSet::remove_tool`] gives it back. A dynamic tool's body is moved by the
+    /// surfaces' impulses in the same step (see the type's docs); no force is added to it.
     ///
-    /// Adding a tool twice changes nothing more.
+    /// Adding a tool twice changes nothing more (a tool registered by
+    /// [`SurfaceSet::set_auto_tools`] becomes yours: it stays a tool when it leaves).
     ///
     /// # Errors
     /// [`CouplingError::NoSuchCollider`] when `tool` is not in the world;
@@ -25,11 +25,20 @@ impl SurfaceSet {
         tool: ColliderHandle,
         world: &mut PhysicsWorld,
     ) -> Result<(), CouplingError> {
+        self.auto.remove(&tool);
+        self.add_tool_in(tool, &mut world.colliders)
+    }
+
+    /// [`SurfaceSet::add_tool`] on the collider set.
+    pub(super) fn add_tool_in(
+        &mut self,
+        tool: ColliderHandle,
+        colliders: &mut ColliderSet,
+    ) -> Result<(), CouplingError> {
         if self.tools.contains_key(&tool) {
             return Ok(());
         }
-        let c = world
-            .colliders
+        let c = colliders
             .get_mut(tool)
             .ok_or(CouplingError::NoSuchCollider)?;
         let extent = c.shape().compute_local_aabb().extents().max_element();
@@ -66,6 +75,12 @@ impl SurfaceSet {
     /// solves its contacts with the surfaces' colliders again). A tool whose collider left the
     /// world is simply forgotten.
     pub fn remove_tool(&mut self, tool: ColliderHandle, world: &mut PhysicsWorld) {
+        self.remove_tool_in(tool, &mut world.colliders);
+    }
+
+    /// [`SurfaceSet::remove_tool`] on the collider set.
+    pub(super) fn remove_tool_in(&mut self, tool: ColliderHandle, colliders: &mut ColliderSet) {
+        self.auto.remove(&tool);
         let Some(state) = self.tools.remove(&tool) else {
             return;
         };
@@ -74,7 +89,7 @@ impl SurfaceSet {
             s.sticks.retain(|_, st| st.0 != tool);
             s.pair_friction.remove(&tool);
         }
-        let Some(c) = world.colliders.get_mut(tool) else {
+        let Some(c) = colliders.get_mut(tool) else {
             return;
         };
         if state.had_surface_group {

@@ -1,0 +1,208 @@
+//! Any body as a tool (issue 13, item 3): a surface with `set_auto_tools` takes every dynamic
+//! body coming at it as a tool with no registration, as rapier's rules for the pair allow, and
+//! gives it back when it leaves.
+
+use crate::common::pinned_plate;
+use rapier_touch::coupling::SURFACE_SOLVER_GROUP;
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+use rapier_touch::surface::meshing::plate_rim;
+
+const CELLS: u32 = 12;
+
+/// A 1 m plate of 12 × 12 cells with edges of 60 N/m (dampers of 2 N·s/m, rim pinned, 4
+/// substeps, its collider in collision group 1) taking any body as a tool, under gravity.
+fn auto_plate() -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
+    let mut world = PhysicsWorld::default();
+    let (mut set, h) = pinned_plate(&mut world, 1.0, CELLS, 60.0, None, 4);
+    set.get_mut(h)
+        .unwrap()
+        .surface
+        .set_spring(60.0, 2.0)
+        .unwrap();
+    let collider = set.get(h).unwrap().collider().unwrap();
+    world.colliders[collider].set_collision_groups(InteractionGroups::new(
+        Group::GROUP_1,
+        Group::ALL,
+        Default::default(),
+    ));
+    set.set_auto_tools(h, true).unwrap();
+    (world, set, h)
+}
+
+/// A dynamic box of `half` half-extents and `mass` with its centre at `y` above the plate's
+/// middle, on collider `builder` (its groups as the test sets them).
+fn drop_box(
+    world: &mut PhysicsWorld,
+    half: f32,
+    mass: f32,
+    y: f32,
+    builder: ColliderBuilder,
+) -> (RigidBodyHandle, ColliderHandle) {
+    let body = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.03, y, -0.02))
+            .can_sleep(false),
+    );
+    let density = mass / (8.0 * half * half * half);
+    let c = world.insert_collider(builder.density(density), Some(body));
+    (body, c)
+}
+
+/// The springs' pull on the plate's pinned rim (the plate's weight is not simulated: its
+/// surface has no gravity), which must balance what rests on the plate.
+fn pins_pull(set: &SurfaceSet, h: SurfaceHandle) -> Vector {
+    let s = &set.get(h).unwrap().surface;
+    plate_rim(CELLS, CELLS)
+        .into_iter()
+        .map(|i| s.internal_force(i))
+        .sum()
+}
+
+/// An unregistered box of 0.5 kg dropped from 30 cm dents the plate and comes to rest on it:
+/// the plate's pins carry its weight (Newton's third law through the spring network: the
+/// reference is the box's weight, not the crate's reaction), the dent is as deep as the box
+/// is low, and rapier's rigid contact with the plate's collider (which would hold it at the
+/// plate's plane) is not what carries it.
+#[test]
+fn an_unregistered_box_dents_the_plate_and_rests_in_it() {
+    let (mut world, mut set, h) = auto_plate();
+    let half = 0.08;
+    let (body, cube) = drop_box(
+        &mut world,
+        half,
+        0.5,
+        0.3,
+        ColliderBuilder::cuboid(half, half, half),
+    );
+    let weight = world.bodies[body].mass() * 9.81;
+    let mut fastest_up = 0.0f32;
+    for step in 0..240 {
+        set.step(&mut world);
+        let vy = world.bodies[body].linvel().y;
+        if step > 120 {
+            fastest_up = fastest_up.max(vy.abs());
+        }
+    }
+    assert!(set.tool_reaction(cube).is_some(), "not taken as a tool");
+    assert!(fastest_up < 1e-2, "still moving at {fastest_up} m/s");
+    let pins = pins_pull(&set, h);
+    assert!(
+        (pins.y + weight).abs() < 0.03 * weight,
+        "pins {pins:?} vs weight {weight}"
+    );
+    // The box sits in the dent: its bottom is below the plate's plane by about the dent.
+    let bottom = world.bodies[body].translation().y - half;
+    let dent = set.get(h).unwrap().surface.max_displacement();
+    assert!(dent > 5e-3, "dent {dent} m");
+    assert!(
+        bottom < -0.5 * dent,
+        "bottom {bottom} m over a dent of {dent} m"
+    );
+    assert!(
+        bottom > -dent - 1e-3,
+        "bottom {bottom} m below the dent {dent} m"
+    );
+    // Taken as a tool: rapier no longer solves its contact with the plate's collider.
+    let groups = world.colliders[cube].solver_groups();
+    assert!(!groups.filter.contains(SURFACE_SOLVER_GROUP));
+}
+
+/// rapier's rules for the pair: a box whose collision groups leave the plate's group out falls
+/// through it (as in vanilla rapier), a sensor falls through, and a box whose solver groups leave out
+/// the surfaces' group (no rigid response wanted from them) is not taken as a tool and falls
+/// through too (rapier computes its contact with the plate's collider but does not solve it).
+#[test]
+fn rapiers_rules_for_the_pair_are_kept() {
+    let (mut world, mut set, _) = auto_plate();
+    let half = 0.05;
+    let cuboid = || ColliderBuilder::cuboid(half, half, half);
+    let no_collision = cuboid().collision_groups(InteractionGroups::new(
+        Group::GROUP_2,
+        Group::ALL - Group::GROUP_1,
+        Default::default(),
+    ));
+    let sensor = cuboid().sensor(true);
+    let no_solve = cuboid().solver_groups(InteractionGroups::new(
+        Group::ALL,
+        Group::ALL - SURFACE_SOLVER_GROUP,
+        Default::default(),
+    ));
+    let dropped: Vec<(RigidBodyHandle, ColliderHandle)> = [no_collision, sensor, no_solve]
+        .into_iter()
+        .map(|b| drop_box(&mut world, half, 0.2, 0.3, b))
+        .collect();
+    for _ in 0..90 {
+        set.step(&mut world);
+    }
+    for (i, (body, c)) in dropped.iter().enumerate() {
+        assert!(set.tool_reaction(*c).is_none(), "box {i} taken as a tool");
+        let y = world.bodies[*body].translation().y;
+        assert!(y < -0.5, "box {i} held at {y} m");
+    }
+}
+
+/// A box that is thrown off the plate is given back when it is clear of it (its solver
+/// groups restored), and one registered by hand stays a tool.
+#[test]
+fn a_body_that_leaves_is_given_back() {
+    let (mut world, mut set, _) = auto_plate();
+    let half = 0.05;
+    let (body, cube) = drop_box(
+        &mut world,
+        half,
+        0.2,
+        0.12,
+        ColliderBuilder::cuboid(half, half, half),
+    );
+    let groups = world.colliders[cube].solver_groups();
+    let (_, mine) = drop_box(
+        &mut world,
+        half,
+        0.2,
+        3.0,
+        ColliderBuilder::cuboid(half, half, half),
+    );
+    set.add_tool(mine, &mut world).unwrap();
+    for _ in 0..30 {
+        set.step(&mut world);
+    }
+    assert!(set.tool_reaction(cube).is_some(), "not taken");
+    // Thrown up and sideways, far from the plate.
+    world.bodies[body].set_translation(Vector::new(5.0, 5.0, 0.0), true);
+    world.bodies[body].set_linvel(Vector::new(0.0, 1.0, 0.0), true);
+    for _ in 0..3 {
+        set.step(&mut world);
+    }
+    assert!(set.tool_reaction(cube).is_none(), "not given back");
+    assert_eq!(world.colliders[cube].solver_groups(), groups);
+    assert!(
+        set.tool_reaction(mine).is_some(),
+        "the registered tool was given back"
+    );
+}
+
+/// Bad input: a surface with no collider cannot take bodies (nothing of it in rapier's
+/// world), and a stale handle is refused.
+#[test]
+fn auto_tools_need_a_collider_and_a_surface() {
+    let mut world = PhysicsWorld::default();
+    let fixed = world.insert_body(RigidBodyBuilder::fixed());
+    let surface =
+        MassSpringSurfaceBuilder::from_mesh(&rapier_touch::surface::meshing::plate(1.0, 1.0, 2, 2))
+            .build()
+            .unwrap();
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps: 1,
+        collider: false,
+    };
+    let h = set.insert(surface, fixed, &mut world, options).unwrap();
+    assert_eq!(set.set_auto_tools(h, true), Err(CouplingError::NoCollider));
+    assert_eq!(set.set_auto_tools(h, false), Ok(()));
+    set.remove(h, &mut world);
+    assert_eq!(
+        set.set_auto_tools(h, true),
+        Err(CouplingError::NoSuchSurface)
+    );
+}
