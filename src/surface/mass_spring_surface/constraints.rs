@@ -53,19 +53,23 @@ pub(super) fn constrain(
     };
     let h = list.len();
     // The rows on rigid holders, and the holder's compliance between two rows.
-    let holder_rows: Vec<Option<HolderRow>> = cons
-        .iter()
-        .map(|(d, _, _, row)| match *row {
-            Row::Normal(pi) | Row::Tangent(pi) => {
-                let (k, arm) = points[pi].holder?;
-                holders.get(k).map(|s| HolderRow::new(k, s, *d, arm))
-            }
-            Row::Vertex => None,
-        })
-        .collect();
+    // (Empty without holders: the kinematic tools' solve pays nothing for them.)
+    let holder_rows: Vec<Option<HolderRow>> = if holders.is_empty() {
+        Vec::new()
+    } else {
+        cons.iter()
+            .map(|(d, _, _, row)| match *row {
+                Row::Normal(pi) | Row::Tangent(pi) => {
+                    let (k, arm) = points[pi].holder?;
+                    holders.get(k).map(|s| HolderRow::new(k, s, *d, arm))
+                }
+                Row::Vertex => None,
+            })
+            .collect()
+    };
     let any_holder = holder_rows.iter().any(Option::is_some);
-    let coupling = |a: usize, b: usize| match (&holder_rows[a], &holder_rows[b]) {
-        (Some(x), Some(y)) => x.coupling(y),
+    let coupling = |a: usize, b: usize| match (holder_rows.get(a), holder_rows.get(b)) {
+        (Some(Some(x)), Some(Some(y))) => x.coupling(y),
         _ => 0.0,
     };
     // What the holders' motion under some impulses takes off row `c`.
@@ -73,7 +77,11 @@ pub(super) fn constrain(
         if m.is_empty() {
             return 0.0;
         }
-        holder_rows[c].map_or(0.0, |r| r.along(m))
+        holder_rows
+            .get(c)
+            .copied()
+            .flatten()
+            .map_or(0.0, |r| r.along(m))
     };
     // P restricted to the involved vertices (h × h), one column read each.
     let mut p_hh = zeroed(&mut memory.scratch.block, h, h);
@@ -326,7 +334,8 @@ pub(super) fn constrain(
                             } else {
                                 a_entry(&cons[ca], &cons[cb])
                             };
-                            entry + coupling(ca, cb) + if i == j { 1e-12 * scale } else { 0.0 }
+                            let held = if any_holder { coupling(ca, cb) } else { 0.0 };
+                            entry + held + if i == j { 1e-12 * scale } else { 0.0 }
                         }
                     };
                 }
