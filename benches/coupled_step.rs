@@ -21,6 +21,10 @@
 //! in a 1 kHz world, 1 substep, neighbour filter. The set-up prints each scene's filter. Targets (one core): 790 nodes and 6 tools ≤ 300 µs per full
 //! step, the haptic path ≤ 50 µs, 10,000 nodes with 2 tools ≤ 1 ms.
 //!
+//! `256n_dynamic_ball_17sub`: a dynamic ball resting on a plate, coupled implicitly
+//! (`bench_dynamic`), against rapier's step of the same world with the ball rigid on the
+//! plate's collider.
+//!
 //! `100kn_6cubes_1khz` and `10kn_6cubes_1khz`: the contact search alone on a 100,000- and a
 //! 10,000-node plate of the 784-node plate's spacing pressed by the six cubes
 //! (`bench_search_100k`), against the linear scans it replaced, and the full step there.
@@ -423,5 +427,37 @@ fn bench_search(c: &mut Criterion, label: &str, side: u32) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_search_100k);
+/// A dynamic tool: `scenes::BallOnPlateScene` (a 0.1 kg ball on a 256-node plate, 17 substeps,
+/// the exact filter) at rest after 2 s, stepped through `SurfaceSet::step` (rapier's step, then
+/// the plate's substeps with the ball's mass in each solve), against rapier's own step of the
+/// same world with the ball's solver groups restored (a rigid ball on the plate's collider).
+fn bench_dynamic(c: &mut Criterion) {
+    use rapier_touch::scenes::BallOnPlateScene;
+    let mut g = c.benchmark_group("coupled_step");
+    g.sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    let mut scene = BallOnPlateScene::new();
+    for _ in 0..120 {
+        scene.step();
+    }
+    assert!(scene.ball_velocity().length() < 1e-3, "the ball rests");
+    g.bench_function("256n_dynamic_ball_17sub/full", |b| b.iter(|| scene.step()));
+    let mut rigid = BallOnPlateScene::new();
+    for _ in 0..120 {
+        rigid.step();
+    }
+    let (ball, body, mut world) = (rigid.ball_collider, rigid.ball, rigid.world);
+    rigid.set.remove_tool(ball, &mut world);
+    // Kept awake: asleep on the rigid plate, rapier's step would do nothing.
+    g.bench_function("256n_dynamic_ball_17sub/rapier_step", |b| {
+        b.iter(|| {
+            world.bodies[body].wake_up(true);
+            world.step()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_search_100k, bench_dynamic);
 criterion_main!(benches);
