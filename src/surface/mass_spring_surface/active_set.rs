@@ -44,6 +44,20 @@ pub(super) fn solve_pushing(
     solved
 }
 
+/// The rows of the symmetric `a` that nearly repeat rows before them in `order` (a
+/// factorization in that order leaves them out, as [`solve_pushing`] does), over the factor's
+/// storage `factor`.
+pub(super) fn repeated_rows(
+    a: &nalgebra::DMatrix<f64>,
+    order: &[usize],
+    factor: &mut Vec<f64>,
+) -> Vec<usize> {
+    let mut chol = Cholesky::new(a.nrows(), std::mem::take(factor));
+    let left_out = chol.factorize(a, order);
+    *factor = chol.l;
+    left_out
+}
+
 /// [`solve_pushing`] on the factor's workspace `chol`.
 fn solve_on(
     chol: &mut Cholesky,
