@@ -264,8 +264,10 @@ pub(super) struct ToolState {
 /// # Limitations
 /// - A dynamic tool touching two surfaces in one step gets the sum of what each changed of its
 ///   motion, each surface solving as if the other were not there. Its friction, like a
-///   kinematic tool's, is [`SurfaceSet::set_tool_friction`]'s, not its collider's. A body
-///   on a surface is woken every step (the surface's impulses reach it), so it never sleeps.
+///   kinematic tool's, is [`SurfaceSet::set_tool_friction`]'s, not its collider's. rapier
+///   decides when it sleeps; a sleeping one is woken when the surfaces move it faster than
+///   its sleep thresholds (a box at rest on a plate still turns back and forth slightly, and
+///   does not fall asleep).
 ///   The haptic path ([`SurfaceSet::haptic_step`]) holds dynamic tools where they are.
 /// - Curved tools load the surface's vertices only (mesh it finer than a ball). Polyhedral
 ///   tools also press their vertices and edges between the surface's vertices, next to a

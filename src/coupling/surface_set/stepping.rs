@@ -200,7 +200,10 @@ impl SurfaceSet {
             }
         }
         crate::coupling::events::update(&mut self.touch, touching);
-        // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step).
+        // The colliders follow the deformed surfaces (a BVH refit each, once per rigid step),
+        // unless no vertex moved by a millionth of the surface's size since the last update: a
+        // changed shape makes rapier wake every body whose collider touches it, and a body
+        // resting on a surface at rest never slept.
         for (_, entry) in self.entries.iter_mut() {
             let Some(s) = entry.as_mut() else {
                 continue;
@@ -208,8 +211,18 @@ impl SurfaceSet {
             if let Some(ch) = s.collider {
                 s.surface.positions_into(&mut s.scratch);
                 if let Some(c) = world.colliders.get_mut(ch) {
-                    if let Some(m) = c.shape_mut().as_trimesh_mut() {
-                        m.set_vertices(&s.scratch);
+                    let moved = c.shape().as_trimesh().is_none_or(|m| {
+                        let tol = 1e-6 * m.local_aabb().extents().max_element();
+                        m.vertices().len() != s.scratch.len()
+                            || m.vertices()
+                                .iter()
+                                .zip(&s.scratch)
+                                .any(|(a, b)| (*a - *b).length_squared() > tol * tol)
+                    });
+                    if moved {
+                        if let Some(m) = c.shape_mut().as_trimesh_mut() {
+                            m.set_vertices(&s.scratch);
+                        }
                     }
                 }
             }
@@ -221,17 +234,33 @@ impl SurfaceSet {
         // (their free motion at rapier's new velocity, changed by what each surface changed),
         // their colliders with them.
         let mut moved = Vec::new();
+        let length_unit = world.integration_parameters.length_unit;
         for (d, change) in dynamic.iter().zip(&changes) {
             let (Some((pose, v, w)), Some(b)) = (change.motion(), world.bodies.get_mut(d.body))
             else {
                 continue;
             };
-            if pose.is_finite() && v.is_finite() && w.is_finite() {
-                b.set_position(pose, true);
-                b.set_linvel(v, true);
-                b.set_angvel(w, true);
-                moved.push(d.body);
+            if !(pose.is_finite() && v.is_finite() && w.is_finite()) {
+                continue;
             }
+            // rapier decides when the body sleeps: an awake one is not woken again (that
+            // would restart its sleep timer at every step, and a body resting on a surface
+            // never slept), and a sleeping one stays asleep, where it is, unless the
+            // surfaces moved it faster than rapier's own thresholds for sleep.
+            if b.is_sleeping() {
+                let a = b.activation();
+                let linear = a.normalized_linear_threshold * length_unit;
+                let stirred = (v - b.linvel()).length() > linear
+                    || (w - b.angvel()).length() > a.angular_threshold;
+                if !stirred {
+                    continue;
+                }
+                b.wake_up(true);
+            }
+            b.set_position(pose, false);
+            b.set_linvel(v, false);
+            b.set_angvel(w, false);
+            moved.push(d.body);
         }
         crate::hooks::sync_moved_colliders(world, &mut moved);
     }
