@@ -370,7 +370,7 @@ fn retarget_holds(
 }
 
 /// The friction of tool `t` on surface `s`: the pair's own, or else the tool's.
-fn friction_on(s: &AttachedSurface, t: &ToolMotion) -> Friction {
+pub(super) fn friction_on(s: &AttachedSurface, t: &ToolMotion) -> Friction {
     s.pair_friction
         .get(&t.handle)
         .copied()

@@ -1,6 +1,6 @@
 //! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
 
-use super::dynamic_tools::{DynamicTool, MotionChange};
+use super::dynamic_tools::{press_ahead, DynamicTool, MotionChange};
 use super::events::{ToolTouchEvent, TouchTracker};
 use super::friction::{Friction, Sticks};
 use super::haptic_links::LinkState;

@@ -172,6 +172,9 @@ impl SurfaceSet {
                         }
                     })
                     .collect();
+                if k == 1 {
+                    press_ahead(s, world, &body_pose, (&poses, &states), h);
+                }
                 let substep = surface_substep(s, world, &body_pose, (&poses, &mut states), h);
                 for (th, r, contacts) in substep {
                     let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
