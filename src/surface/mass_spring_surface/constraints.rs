@@ -4,14 +4,16 @@
 //! weights). Both are solved together through the filter's columns, so the rest of the
 //! surface responds to them as to moving pins.
 
-use super::active_set::{give_back, repeated_rows, solve_pushing, zeroed, Scratch};
+use super::active_set::{give_back, solve_pushing, zeroed};
 use super::blocks::independent_blocks;
 use super::point_hold::{ActiveMemory, PointHold, Remembered};
 use super::rigid_holder::{give_impulses, merge_blocks, motion, HolderRow, HolderState};
 use crate::surface::filter::{Filter, FilterKind};
+use friction::{Grip, SlidingPoint, FRICTION_PASSES, FRICTION_TOLERANCE};
 use glamx::DVec3;
-use rows::{rows, Con, Row, Rows};
+use rows::{rows, surface_independent, Con, Row, Rows};
 
+mod friction;
 mod rows;
 
 /// The holders' impulses in the filtered step. Each constraint is a direction `d` applied to a
@@ -592,67 +594,4 @@ pub(super) fn constrain(
     }
     filter.add_impulses(&list, &impulse, dv);
     give_impulses(&holder_rows, &lambda, holders);
-}
-
-/// How a point with friction holds to its holder in a pass of the filtered step's solve.
-#[derive(Copy, Clone, Debug)]
-enum Grip {
-    /// Not pushing: no friction.
-    Off,
-    /// Carried by its holder (its tangent rows in the solve).
-    Stuck,
-    /// Sliding: its tangential impulse fixed at `impulse` (kinetic friction of its normal
-    /// impulse) along the unit `direction` in its tangent rows' basis.
-    Sliding { direction: (f64, f64), impulse: f64 },
-}
-
-/// A sliding point in a pass: its tangent rows, the unit direction of its impulse in their
-/// basis, and the impulse.
-type SlidingPoint = ((usize, usize), (f64, f64), f64);
-
-/// How closely a sliding point's impulse must follow kinetic friction of its normal impulse
-/// before the passes stop (relative).
-const FRICTION_TOLERANCE: f64 = 1e-3;
-
-/// Most solves of a block with friction (each pass fixes the sliding points' impulses at
-/// kinetic friction of the last pass's normal impulses, and finds which points stick and
-/// which slide).
-const FRICTION_PASSES: usize = 2;
-
-/// `rows` less those that nearly repeat others on the surface alone (`a_entry`: the entries of
-/// `J P Jᵀ`), taken in the order a solve takes them (`priority`: bilateral first, then by
-/// decreasing target: `priority` gives whether a row is push-only, and its target), keeping
-/// their order.
-fn surface_independent(
-    rows: &[usize],
-    cons: &[Con],
-    a_entry: &impl Fn(&Con, &Con) -> f64,
-    priority: impl Fn(usize) -> (bool, f64),
-    scratch: &mut Scratch,
-) -> Vec<usize> {
-    let m = rows.len();
-    let mut s = zeroed(&mut scratch.system, m, m);
-    let scale = rows
-        .iter()
-        .map(|&c| a_entry(&cons[c], &cons[c]))
-        .fold(0.0, f64::max);
-    for (i, &ca) in rows.iter().enumerate() {
-        for (j, &cb) in rows.iter().enumerate().skip(i) {
-            let e = a_entry(&cons[ca], &cons[cb]) + if i == j { 1e-12 * scale } else { 0.0 };
-            s[(i, j)] = e;
-            s[(j, i)] = e;
-        }
-    }
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by(|&p, &q| {
-        let (pp, qq) = (priority(rows[p]), priority(rows[q]));
-        pp.0.cmp(&qq.0).then(qq.1.total_cmp(&pp.1)).then(p.cmp(&q))
-    });
-    let left_out = repeated_rows(&s, &order, &mut scratch.factor);
-    give_back(&mut scratch.system, s);
-    rows.iter()
-        .enumerate()
-        .filter(|(i, _)| !left_out.contains(i))
-        .map(|(_, &c)| c)
-        .collect()
 }

@@ -2,6 +2,7 @@
 //! along its normal (or its three axes), each point hold along its normal and, while its
 //! holder carries it, along two directions of its tangent plane.
 
+use super::super::active_set::{give_back, repeated_rows, zeroed, Scratch};
 use super::super::point_hold::PointHold;
 use super::super::NOT_FREE;
 use glamx::DVec3;
@@ -108,4 +109,42 @@ pub(super) enum Row {
     Normal(usize),
     /// One direction of point hold `i`'s tangent plane, while it is carried (bilateral).
     Tangent(usize),
+}
+
+/// `rows` less those that nearly repeat others on the surface alone (`a_entry`: the entries of
+/// `J P Jᵀ`), taken in the order a solve takes them (`priority`: bilateral first, then by
+/// decreasing target: `priority` gives whether a row is push-only, and its target), keeping
+/// their order.
+pub(super) fn surface_independent(
+    rows: &[usize],
+    cons: &[Con],
+    a_entry: &impl Fn(&Con, &Con) -> f64,
+    priority: impl Fn(usize) -> (bool, f64),
+    scratch: &mut Scratch,
+) -> Vec<usize> {
+    let m = rows.len();
+    let mut s = zeroed(&mut scratch.system, m, m);
+    let scale = rows
+        .iter()
+        .map(|&c| a_entry(&cons[c], &cons[c]))
+        .fold(0.0, f64::max);
+    for (i, &ca) in rows.iter().enumerate() {
+        for (j, &cb) in rows.iter().enumerate().skip(i) {
+            let e = a_entry(&cons[ca], &cons[cb]) + if i == j { 1e-12 * scale } else { 0.0 };
+            s[(i, j)] = e;
+            s[(j, i)] = e;
+        }
+    }
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&p, &q| {
+        let (pp, qq) = (priority(rows[p]), priority(rows[q]));
+        pp.0.cmp(&qq.0).then(qq.1.total_cmp(&pp.1)).then(p.cmp(&q))
+    });
+    let left_out = repeated_rows(&s, &order, &mut scratch.factor);
+    give_back(&mut scratch.system, s);
+    rows.iter()
+        .enumerate()
+        .filter(|(i, _)| !left_out.contains(i))
+        .map(|(_, &c)| c)
+        .collect()
 }
