@@ -423,9 +423,7 @@ pub(super) fn press_ahead(
                 &mut contacts,
                 &mut velocities,
             );
-            for (c, v) in contacts[first..].iter_mut().zip(&velocities[first..]) {
-                c.depth -= h * v.dot(c.normal);
-            }
+            depths_now(&mut contacts[first..], &velocities[first..], h);
         }
         owners.resize(
             contacts.len(),
@@ -440,13 +438,7 @@ pub(super) fn press_ahead(
     if contacts.is_empty() {
         return;
     }
-    for (c, o) in contacts.iter_mut().zip(&owners) {
-        if let Some(d) = o.holder.and_then(|j| dynamic.get(j)) {
-            if c.depth > 0.0 {
-                c.depth = (c.depth - d.slop).max(0.0);
-            }
-        }
-    }
+    within_slop(&mut contacts, &owners, dynamic);
     press_all(
         &mut s.surface,
         &contacts,
@@ -454,4 +446,31 @@ pub(super) fn press_ahead(
         &owners,
         &mut s.pressed,
     );
+}
+
+/// A dynamic tool's contacts found at its pose after a substep of free motion (its material
+/// points' velocities `velocities`), at their depths now: that motion taken off (negative, a
+/// speculative contact).
+pub(super) fn depths_now(contacts: &mut [SurfaceContact], velocities: &[Vector], h: Real) {
+    for (c, v) in contacts.iter_mut().zip(velocities) {
+        c.depth -= h * v.dot(c.normal);
+    }
+}
+
+/// A dynamic tool's contacts that overlap by less than its slop are pressed as touching, the
+/// rest by what passes the slop: moving a vertex that carries a load out by `d` does work
+/// `F d` the body never paid for (a ball resting on the edges round a vertex overlapped them by
+/// 20 µm at every substep, and the energy that added kept it sliding about the dent).
+pub(super) fn within_slop(
+    contacts: &mut [SurfaceContact],
+    owners: &[PressOwner],
+    dynamic: &[DynamicTool],
+) {
+    for (c, o) in contacts.iter_mut().zip(owners) {
+        if let Some(d) = o.holder.and_then(|j| dynamic.get(j)) {
+            if c.depth > 0.0 {
+                c.depth = (c.depth - d.slop).max(0.0);
+            }
+        }
+    }
 }

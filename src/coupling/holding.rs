@@ -3,7 +3,9 @@
 //! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
 //! gets the reaction of the vertices it holds.
 
-use super::dynamic_tools::{move_on, press_dynamic, set_holders, DynamicTool};
+use super::dynamic_tools::{
+    depths_now, move_on, press_dynamic, set_holders, within_slop, DynamicTool,
+};
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::pressing::{
     add_grasped, find_contacts, part_query, press_all, reaction_of, record_grasped,
@@ -245,9 +247,7 @@ pub(super) fn surface_substep(
                     &mut velocities,
                 );
                 if t.holder.is_some() {
-                    for (c, v) in s.contacts[first..].iter_mut().zip(&velocities[first..]) {
-                        c.depth -= h * v.dot(c.normal);
-                    }
+                    depths_now(&mut s.contacts[first..], &velocities[first..], h);
                 }
                 let owner = PressOwner {
                     tool: t.handle,
@@ -273,18 +273,7 @@ pub(super) fn surface_substep(
             &mut velocities,
             &mut owners,
         );
-        // A dynamic tool's contacts that overlap by less than its slop are pressed as
-        // touching, the rest by what passes the slop: moving a vertex that carries a load out
-        // by `d` does work `F d` the body never paid for (a ball resting on the edges round a
-        // vertex overlapped them by 20 µm at every substep, and the energy that added kept it
-        // sliding about the dent).
-        for (c, o) in s.contacts.iter_mut().zip(&owners) {
-            if let Some(d) = o.holder.and_then(|j| dynamic.get(j)) {
-                if c.depth > 0.0 {
-                    c.depth = (c.depth - d.slop).max(0.0);
-                }
-            }
-        }
+        within_slop(&mut s.contacts, &owners, dynamic);
         let ids = press_all(
             &mut s.surface,
             &s.contacts,
