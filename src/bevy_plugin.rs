@@ -28,8 +28,9 @@
 //!   hooks' `SystemParam` and call its methods from yours.
 //! - [`crate::coupling::SurfaceSet::add_tool`] takes a solver group off the tool's collider;
 //!   a later change of that entity's `SolverGroups` component puts it back.
-//! - A dynamic tool receives the surface's force as a rapier user force on its body (one step
-//!   of lag, as without bevy); a change of its `ExternalForce` component resets it for a step.
+//! - A dynamic tool is moved by the surfaces in the same step, its mass in their solve (as
+//!   without bevy: [`crate::coupling::SurfaceSet`]'s docs), after rapier's step and before
+//!   plugin's writeback copies the bodies to their transforms.
 //! - The default context only ([`DefaultRapierContext`]).
 //!
 //! # Example

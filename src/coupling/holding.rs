@@ -316,7 +316,8 @@ fn retarget_holds(
         .filter_map(|t| {
             let collider = world.colliders.get(t.handle)?;
             // Only tools whose motion is prescribed: a dynamic tool's comes from the
-            // surface's force a step late, and is not chased (as in `hold_vertices`).
+            // surface's solve itself (its rigid holder), and is not chased (as in
+            // `hold_vertices`).
             if collider
                 .parent()
                 .and_then(|b| world.bodies.get(b))
