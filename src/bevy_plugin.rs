@@ -30,7 +30,7 @@
 //!   a later change of that entity's `SolverGroups` component puts it back.
 //! - A dynamic tool is moved by the surfaces in the same step, its mass in their solve (as
 //!   without bevy: [`crate::coupling::SurfaceSet`]'s docs), after rapier's step and before
-//!   plugin's writeback copies the bodies to their transforms.
+//!   bevy_rapier's writeback copies the bodies to their transforms.
 //! - The default context only ([`DefaultRapierContext`]).
 //!
 //! # Example
