@@ -6,7 +6,7 @@
 //!   surface's TriMesh collider and the tools): the reference the ratios are quoted against;
 //! - `full`: one coupled step without rapier's own step — `SurfaceSet::step_with` with a rigid
 //!   step that only moves the tools: tool contacts, every surface substep, tool reactions,
-//!   forces on dynamic tools and the collider update (`TriMesh::set_vertices`, a BVH refit);
+//!   the dynamic tools' motion and the collider update (`TriMesh::set_vertices`, a BVH refit);
 //! - `haptic`: the haptic path, `SurfaceSet::haptic_step` for one tool (tool contacts, one
 //!   surface step, tool forces; no collider update);
 //! - `collider_update`: the collider update alone (`set_vertices` on the surface's TriMesh).
