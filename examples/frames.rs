@@ -8,8 +8,9 @@
 //!   mesh edges between two held vertices (the contact patch) yellow; the force of the organ on
 //!   each tool is a red arrow from the tool's centre, 10 mm per 0.1 N.
 //! - `ball_on_plate_<n>.png`: `scenes::BallOnPlateScene` (the `ball_on_plate` example) at the
-//!   release, at the deepest dent of the first impact, at the top of the first bounce, and at
-//!   rest at the end. The plate is coloured by displacement, the ball drawn, its held vertices
+//!   release (1), at the deepest dent of the first impact (2), at the top of the first bounce
+//!   if it bounces (3; it does not since its mass entered the plate's solve), and at rest at
+//!   the end (4). The plate is coloured by displacement, the ball drawn, its held vertices
 //!   red, the plate's force on the ball (averaged over the step's substeps) a red arrow and the
 //!   ball's weight a black one, 20 mm per N.
 //!
@@ -247,7 +248,8 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
     for step in 1..=steps {
         sim.step();
         bar.inc(1);
-        let held = sim.reaction().held_vertices > 0;
+        let r = sim.reaction();
+        let held = r.held_vertices + r.pressed_points > 0;
         let d = sim.surface().max_displacement();
         max_disp = max_disp.max(d);
         if held && !left && d > deepest.1 {
@@ -264,11 +266,13 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
             apex = (step, y);
         }
     }
-    let mut moments = vec![(0, "RELEASED"), (deepest.0, "DEEPEST DENT")];
+    // (step, caption, file number: the same moment keeps its file whether the ball bounces or
+    // not).
+    let mut moments = vec![(0, "RELEASED", 1), (deepest.0, "DEEPEST DENT", 2)];
     if apex.0 != usize::MAX && apex.0 > 0 {
-        moments.push((apex.0, "TOP OF THE BOUNCE"));
+        moments.push((apex.0, "TOP OF THE BOUNCE", 3));
     }
-    moments.push((steps, "AT REST"));
+    moments.push((steps, "AT REST", 4));
     moments.sort_by_key(|m| m.0);
 
     let mut sim = S::new();
@@ -281,7 +285,7 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
             Vector::new(0.0, -0.04, 0.0),
         ])
         .collect();
-    for (n, (at, what)) in moments.iter().enumerate() {
+    for (at, what, file) in &moments {
         while sim.steps() < *at {
             sim.step();
             bar.inc(1);
@@ -311,7 +315,7 @@ fn ball_on_plate(dir: &Path, bar: &indicatif::ProgressBar) -> Result<(), Box<dyn
             max_disp,
             &frame_points,
             Vector::new(-0.35, -0.15, -1.0),
-            &dir.join(format!("ball_on_plate_{}.png", n + 1)),
+            &dir.join(format!("ball_on_plate_{file}.png")),
         )?;
     }
     Ok(())
