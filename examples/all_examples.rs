@@ -1052,8 +1052,9 @@ async fn ball_on_plate(viewer: &mut TestbedViewer) {
         settings.set_label(
             "Surface force",
             format!(
-                "{:.3} N (weight {weight:.3} N), {} vertices held",
-                r.mean_force.y, r.held_vertices
+                "{:.3} N (weight {weight:.3} N), {} points pressed",
+                r.mean_force.y,
+                r.held_vertices + r.pressed_points
             ),
         );
         settings.set_label("Largest displacement", format!("{:.2} mm", disp * 1e3));
