@@ -308,3 +308,61 @@ fn bad_force_profiles_are_errors() {
     // A zero-length ramp is a step, and is accepted.
     assert!(s.add_force_schedule(vec![1], ramp(0.0, 0.0)).is_ok());
 }
+
+/// Rigid holders ([`MassSpringSurface::set_holders`]) that are not finite or have a negative
+/// inverse mass or inertia are errors and leave the holders as they were; a press naming a
+/// holder past the list, or with a non-finite pressing point, is an error and presses nothing.
+#[test]
+fn bad_rigid_holders_are_errors() {
+    use rapier_touch::surface::RigidHolder;
+    let (v, t) = grid(2, 2, 1.0);
+    let mut s = MassSpringSurfaceBuilder::new(v, t)
+        .pinned([0])
+        .build()
+        .unwrap();
+    let good = RigidHolder::point_mass(0.1, Vector::ZERO, Vector::ZERO);
+    s.set_holders(&[good]).unwrap();
+    let nan = RigidHolder {
+        velocity: Vector::new(f32::NAN, 0.0, 0.0),
+        ..good
+    };
+    let negative = RigidHolder {
+        inverse_mass: rapier_touch::rapier3d::math::Matrix::from_diagonal(Vector::new(
+            -1.0, 1.0, 1.0,
+        )),
+        ..good
+    };
+    let far = RigidHolder {
+        centre: Vector::splat(f32::INFINITY),
+        ..good
+    };
+    for bad in [nan, negative, far] {
+        assert_eq!(
+            s.set_holders(&[good, bad]),
+            Err(SurfaceError::InvalidHolder)
+        );
+    }
+    // Still the one good holder: index 0 works, index 1 does not.
+    let press = |holder| PointPress {
+        vertices: &[(4, 1.0)],
+        normal: Vector::new(0.0, -1.0, 0.0),
+        depth: 0.01,
+        normal_velocity: 0.0,
+        tangential: Tangential::Free,
+        holder,
+    };
+    assert_eq!(
+        s.press_points(&[press(Some((1, Vector::ZERO)))]),
+        Err(SurfaceError::InvalidPointHold)
+    );
+    assert_eq!(
+        s.press_points(&[press(Some((0, Vector::splat(f32::NAN))))]),
+        Err(SurfaceError::InvalidPointHold)
+    );
+    assert_eq!(s.num_point_holds(), 0);
+    assert_eq!(
+        s.press_points(&[press(Some((0, Vector::ZERO)))]),
+        Ok(vec![Some(0)])
+    );
+    assert!(s.holder_impulse(0).is_some() && s.holder_impulse(1).is_none());
+}
