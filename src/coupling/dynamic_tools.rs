@@ -14,7 +14,7 @@
 
 use super::friction::Friction;
 use super::holding::{friction_on, ToolMotion};
-use super::pressing::{find_contacts, part_query, press_all, reaction_of, PressOwner};
+use super::pressing::{press_all, reaction_of, PressOwner};
 use super::surface_set::{AttachedSurface, ToolReaction};
 use super::tool_shape::contact_margin;
 use crate::geometry::solid_contacts::{triangle_contacts, vertex_contacts};
@@ -323,15 +323,7 @@ pub(super) fn press_dynamic(
         contacts,
         velocities,
     );
-    owners.resize(
-        contacts.len(),
-        PressOwner {
-            tool: t.handle,
-            friction,
-            grasp: t.grasp,
-            holder: Some(j),
-        },
-    );
+    owners.resize(contacts.len(), t.owner(friction));
     let (pf, pm, pn) = reaction_of(&s.last_pressed, t.handle, h);
     let force = body_pose.rotation * pf;
     let centre = dynamic.get(j).map_or(t.end.translation, |d| d.centre());
@@ -392,14 +384,7 @@ pub(super) fn press_ahead(
         };
         let shape = t.shape.query.as_deref().unwrap_or(collider.shape());
         let friction = friction_on(s, t);
-        let parts = t
-            .shape
-            .parts
-            .iter()
-            .map(|(local, mesh)| {
-                part_query(mesh, &(inv * t.start * *local), &(inv * t.end * *local))
-            })
-            .reduce(|a, b| a.merged(&b));
+        let parts = t.parts_reach(&inv);
         press_dynamic(
             s,
             (t, k, j),
@@ -409,31 +394,19 @@ pub(super) fn press_ahead(
             h,
             (&mut contacts, &mut velocities, &mut owners),
         );
-        for (local, mesh) in &t.shape.parts {
-            let first = contacts.len();
-            find_contacts(
+        t.feature_contacts(
+            &inv,
+            h,
+            (
                 s.surface.triangles(),
-                (s.search.triangles_of_tool(k), &mut kept),
-                mesh,
-                &(inv * t.start * *local),
-                &(inv * t.end * *local),
-                h,
-                &s.scratch,
-                &s.scratch,
-                &mut contacts,
-                &mut velocities,
-            );
-            depths_now(&mut contacts[first..], &velocities[first..], h);
-        }
-        owners.resize(
-            contacts.len(),
-            PressOwner {
-                tool: t.handle,
-                friction,
-                grasp: t.grasp,
-                holder: Some(j),
-            },
+                s.search.triangles_of_tool(k),
+                &mut kept,
+            ),
+            (&s.scratch, &s.scratch),
+            &mut contacts,
+            &mut velocities,
         );
+        owners.resize(contacts.len(), t.owner(friction));
     }
     if contacts.is_empty() {
         return;

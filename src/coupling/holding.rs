@@ -16,6 +16,7 @@ use super::tool_shape::{contact_margin, ToolShape};
 use crate::geometry::tool_boundary::{
     distance_outside, exit_along, nearest_on_boundary, outward_normal,
 };
+use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -63,6 +64,71 @@ pub(super) struct ToolMotion {
     pub holder: Option<usize>,
 }
 
+impl ToolMotion {
+    /// Where its sharp features may press over its motion (surface frame, `inv`: world to
+    /// surface), or `None` for a tool with no polyhedral part.
+    pub(super) fn parts_reach(&self, inv: &Pose) -> Option<Aabb> {
+        self.shape
+            .parts
+            .iter()
+            .map(|(local, mesh)| {
+                part_query(
+                    mesh,
+                    &(*inv * self.start * *local),
+                    &(*inv * self.end * *local),
+                )
+            })
+            .reduce(|a, b| a.merged(&b))
+    }
+
+    /// Who presses its contacts, with `friction`.
+    pub(super) fn owner(&self, friction: Friction) -> PressOwner {
+        PressOwner {
+            tool: self.handle,
+            friction,
+            grasp: self.grasp,
+            holder: self.holder,
+        }
+    }
+
+    /// Its vertices and edges against the surface (`triangles`; this substep's `candidates` of
+    /// the tool, `kept` scratch; positions `before` and `now`), appended to `contacts` with the
+    /// tool's material velocities there. A dynamic tool's motion is the next substep's,
+    /// predicted: the surface stands still in it (`now` both times), and each contact is
+    /// pressed at its depth now ([`super::dynamic_tools::depths_now`]: negative, a speculative
+    /// contact).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn feature_contacts(
+        &self,
+        inv: &Pose,
+        h: Real,
+        (triangles, candidates, kept): (&[[u32; 3]], &[u32], &mut Vec<u32>),
+        (before, now): (&[Vector], &[Vector]),
+        contacts: &mut Vec<SurfaceContact>,
+        velocities: &mut Vec<Vector>,
+    ) {
+        let before = if self.holder.is_some() { now } else { before };
+        for (local, mesh) in &self.shape.parts {
+            let first = contacts.len();
+            find_contacts(
+                triangles,
+                (candidates, kept),
+                mesh,
+                &(*inv * self.start * *local),
+                &(*inv * self.end * *local),
+                h,
+                before,
+                now,
+                contacts,
+                velocities,
+            );
+            if self.holder.is_some() {
+                depths_now(&mut contacts[first..], &velocities[first..], h);
+            }
+        }
+    }
+}
+
 /// Vertices a tool holds: each one's position and the force it puts on the tool (world).
 pub(super) type HeldContacts = Vec<(Vector, Vector)>;
 
@@ -88,9 +154,16 @@ pub(super) fn surface_substep(
     s.surface.positions_into(&mut s.before);
     s.surface.step();
     record_impulses(&s.surface, &mut s.pressed);
-    let mut tools = tools.to_vec();
-    move_on(&mut s.surface, dynamic, &mut tools, body_pose, h);
-    let tools = &tools[..];
+    // (The tools' list is copied only to change the dynamic ones' motions.)
+    let moved;
+    let tools = if dynamic.is_empty() {
+        tools
+    } else {
+        let mut copy = tools.to_vec();
+        move_on(&mut s.surface, dynamic, &mut copy, body_pose, h);
+        moved = copy;
+        &moved[..]
+    };
     std::mem::swap(&mut s.pressed, &mut s.last_pressed);
     s.pressed.clear();
     // Which vertices the tools held through this step: marked in `was_held` (all false but
@@ -115,14 +188,7 @@ pub(super) fn surface_substep(
         .retain_tools(|h| tools.iter().any(|t| t.handle == h));
     for (k, t) in tools.iter().enumerate() {
         // Where the tool's sharp features may press in this substep.
-        let parts = t
-            .shape
-            .parts
-            .iter()
-            .map(|(local, mesh)| {
-                part_query(mesh, &(inv * t.start * *local), &(inv * t.end * *local))
-            })
-            .reduce(|a, b| a.merged(&b));
+        let parts = t.parts_reach(&inv);
         let Some(tool) = world.colliders.get(t.handle) else {
             if let Some(parts) = parts {
                 s.search.near(k, t.handle, &parts);
@@ -222,41 +288,19 @@ pub(super) fn surface_substep(
         s.contacts.append(&mut vertex_presses);
         let (mut velocities, mut owners, mut kept) = (vertex_velocities, vertex_owners, Vec::new());
         for (k, t) in tools.iter().enumerate() {
-            let friction = friction_on(s, t);
-            for (local, mesh) in &t.shape.parts {
-                let first = s.contacts.len();
-                // A dynamic tool's motion is the next substep's, predicted: the surface
-                // stands still in it, and each contact is pressed at its depth now (the
-                // tool's motion to the predicted pose taken off: negative, a speculative
-                // contact).
-                let before = if t.holder.is_some() {
-                    &s.scratch
-                } else {
-                    &s.before
-                };
-                find_contacts(
+            t.feature_contacts(
+                &inv,
+                h,
+                (
                     s.surface.triangles(),
-                    (s.search.triangles_of_tool(k), &mut kept),
-                    mesh,
-                    &(inv * t.start * *local),
-                    &(inv * t.end * *local),
-                    h,
-                    before,
-                    &s.scratch,
-                    &mut s.contacts,
-                    &mut velocities,
-                );
-                if t.holder.is_some() {
-                    depths_now(&mut s.contacts[first..], &velocities[first..], h);
-                }
-                let owner = PressOwner {
-                    tool: t.handle,
-                    friction,
-                    grasp: t.grasp,
-                    holder: t.holder,
-                };
-                owners.resize(s.contacts.len(), owner);
-            }
+                    s.search.triangles_of_tool(k),
+                    &mut kept,
+                ),
+                (&s.before, &s.scratch),
+                &mut s.contacts,
+                &mut velocities,
+            );
+            owners.resize(s.contacts.len(), t.owner(friction_on(s, t)));
         }
         // Grasping tools hold the points they pressed (pressing::GraspedPoint).
         let graspers: Vec<Grasper> = tools

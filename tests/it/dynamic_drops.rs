@@ -189,6 +189,24 @@ fn drops_at_the_corners_of_the_ranges() {
     );
 }
 
+/// [`check`] of a drawn case: mass and stiffness as powers of ten, 17 substeps or 1.
+fn check_drawn(
+    body: Body,
+    log_mass: f32,
+    height: f32,
+    log_k: f32,
+    seventeen: bool,
+) -> Result<(), String> {
+    let substeps = if seventeen { 17 } else { 1 };
+    check(
+        body,
+        10f32.powf(log_mass),
+        height,
+        10f32.powf(log_k),
+        substeps,
+    )
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
@@ -199,9 +217,7 @@ proptest! {
         log_k in 0.0f32..3.0,
         seventeen in any::<bool>(),
     ) {
-        let (mass, k) = (10f32.powf(log_mass), 10f32.powf(log_k));
-        let substeps = if seventeen { 17 } else { 1 };
-        if let Err(e) = check(Body::Ball, mass, height, k, substeps) {
+        if let Err(e) = check_drawn(Body::Ball, log_mass, height, log_k, seventeen) {
             prop_assert!(false, "{}", e);
         }
     }
@@ -221,9 +237,7 @@ proptest! {
         log_k in 1.0f32..3.0,
         seventeen in any::<bool>(),
     ) {
-        let (mass, k) = (10f32.powf(log_mass), 10f32.powf(log_k));
-        let substeps = if seventeen { 17 } else { 1 };
-        if let Err(e) = check(Body::Cube, mass, height, k, substeps) {
+        if let Err(e) = check_drawn(Body::Cube, log_mass, height, log_k, seventeen) {
             prop_assert!(false, "{}", e);
         }
     }
