@@ -242,3 +242,51 @@ proptest! {
         }
     }
 }
+
+/// Odd bodies as dynamic tools: one with no mass (density 0: rapier leaves it where it is), one
+/// thrown at 10³⁰ m/s, and one with x translation and every rotation locked. Nothing turns
+/// NaN, no surface diverges, the fast one does not end through the plate, and the locked one
+/// keeps its locks (the surfaces' impulses reach it through its effective inverse mass and
+/// inertia, zero on locked axes).
+#[test]
+fn odd_dynamic_tools_stay_finite_and_keep_their_locks() {
+    for case in 0..3 {
+        let mut world = PhysicsWorld::default();
+        let (mut set, soft) = pinned_plate(&mut world, 1.0, 8, 100.0, None, 4);
+        let mut builder = RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.1, 0.0));
+        if case == 2 {
+            builder =
+                builder.locked_axes(LockedAxes::TRANSLATION_LOCKED_X | LockedAxes::ROTATION_LOCKED);
+        }
+        let body = world.insert_body(builder);
+        let density = if case == 0 { 0.0 } else { 1000.0 };
+        let c = world.insert_collider(ColliderBuilder::ball(0.05).density(density), Some(body));
+        set.add_tool(c, &mut world).unwrap();
+        if case == 1 {
+            world.bodies[body].set_linvel(Vector::new(1e30, -1e30, 0.0), true);
+        }
+        for _ in 0..120 {
+            set.step(&mut world);
+            let b = &world.bodies[body];
+            assert!(
+                b.translation().is_finite() && b.linvel().is_finite(),
+                "case {case}"
+            );
+            assert!(set.get(soft).unwrap().surface.is_finite(), "case {case}");
+        }
+        let b = &world.bodies[body];
+        assert!(
+            b.translation().y > -0.05,
+            "case {case}: through at {:?}",
+            b.translation()
+        );
+        if case == 0 {
+            assert_eq!(b.translation(), Vector::new(0.0, 0.1, 0.0));
+        }
+        if case == 2 {
+            assert_eq!(b.translation().x, 0.0);
+            assert_eq!(b.angvel(), Vector::ZERO);
+            assert!(b.translation().y < 0.05, "case 2 never landed");
+        }
+    }
+}
