@@ -170,11 +170,30 @@ pub(super) fn press_all(
             holder: owner.holder.map(|k| (k, c.point)),
         })
         .collect();
-    // The geometry layer's contacts are finite, with weights on existing vertices: an error
-    // here would mean a bug, and then nothing is pressed in this substep.
-    let Ok(ids) = surface.press_points(&presses) else {
+    // The geometry layer's contacts are finite, with unit normals and weights on existing
+    // vertices. One that is not (a bug) is left out, reported, and costs no other press: a
+    // single bad press fails `press_points` as a whole, and a contact with a zero normal once
+    // took every press of a substep with it (a resting body fell a step's worth into the
+    // surface).
+    let valid: Vec<bool> = presses.iter().map(|p| surface.press_is_valid(p)).collect();
+    let bad = valid.iter().filter(|v| !**v).count();
+    if bad > 0 {
+        log::warn!("rapier_touch: {bad} invalid surface contact(s) left out of a substep");
+    }
+    let kept: Vec<PointPress<'_>> = presses
+        .iter()
+        .zip(&valid)
+        .filter(|(_, v)| **v)
+        .map(|(p, _)| *p)
+        .collect();
+    let Ok(kept_ids) = surface.press_points(&kept) else {
         return Vec::new();
     };
+    let mut kept_ids = kept_ids.into_iter();
+    let ids: Vec<Option<usize>> = valid
+        .iter()
+        .map(|&v| if v { kept_ids.next().flatten() } else { None })
+        .collect();
     for ((c, id), owner) in contacts.iter().zip(&ids).zip(owners) {
         let Some(id) = *id else {
             continue;
@@ -340,5 +359,54 @@ pub(super) fn record_grasped(
             local: end.inverse_transform_point(c.point),
             local_normal: end.rotation.inverse() * c.normal,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface::meshing::plate;
+    use crate::surface::MassSpringSurfaceBuilder;
+
+    /// A contact the geometry layer should never give (a zero normal) is left out on its own:
+    /// the valid press beside it still moves its vertex by its depth along its normal.
+    #[test]
+    fn an_invalid_contact_costs_no_other_press() {
+        let mut surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, 4, 4))
+            .build()
+            .unwrap();
+        let v = 12; // the plate's centre vertex
+        let before = surface.position(v);
+        let contact = |normal: Vector| SurfaceContact {
+            tool_feature: Feature::Face(u32::MAX),
+            surface: [(v, 1.0), (v, 0.0), (v, 0.0)],
+            count: 1,
+            normal,
+            depth: 0.01,
+            point: before,
+        };
+        let contacts = [contact(Vector::ZERO), contact(Vector::NEG_Y)];
+        let owner = PressOwner {
+            tool: ColliderHandle::invalid(),
+            friction: Friction::default(),
+            grasp: false,
+            holder: None,
+        };
+        let mut pressed = Vec::new();
+        let ids = press_all(
+            &mut surface,
+            &contacts,
+            &[Vector::ZERO; 2],
+            &[owner, owner],
+            &mut pressed,
+        );
+        assert_eq!(ids.len(), 2);
+        assert!(ids[0].is_none() && ids[1].is_some(), "{ids:?}");
+        assert_eq!(pressed.len(), 1);
+        let moved = surface.position(v) - before;
+        assert!(
+            (moved - Vector::new(0.0, -0.01, 0.0)).length() < 1e-6,
+            "{moved:?}"
+        );
     }
 }

@@ -42,6 +42,10 @@ struct Drop {
 enum Body {
     Ball,
     Cube,
+    /// A compound: two balls of 5 cm radius 16 cm apart, joined by a 2 cm square bar.
+    Dumbbell,
+    /// A non-convex TriMesh: a U (legs down) extruded 16 cm, 16 cm wide and 10 cm tall.
+    U,
 }
 
 /// A 1 m plate of 16 × 16 cells ([`pinned_plate`]: rim pinned, edges of `k` with dampers of
@@ -62,6 +66,32 @@ fn drop(body: Body, mass: f32, height: f32, k: f32, substeps: u32) -> Drop {
             4.0 / 3.0 * std::f32::consts::PI * r * r * r,
         ),
         Body::Cube => (ColliderBuilder::cuboid(r, r, r), 8.0 * r * r * r),
+        Body::Dumbbell => {
+            let rb = 0.05;
+            let parts = vec![
+                (Pose::translation(-r, 0.0, 0.0), SharedShape::ball(rb)),
+                (Pose::translation(r, 0.0, 0.0), SharedShape::ball(rb)),
+                (Pose::IDENTITY, SharedShape::cuboid(r, 0.01, 0.01)),
+            ];
+            let volume = 2.0 * 4.0 / 3.0 * std::f32::consts::PI * rb * rb * rb + 8.0 * r * 1e-4;
+            (ColliderBuilder::compound(parts), volume)
+        }
+        Body::U => {
+            let outline = [
+                [-r, -r],
+                [-0.5 * r, -r],
+                [-0.5 * r, 0.0],
+                [0.5 * r, 0.0],
+                [0.5 * r, -r],
+                [r, -r],
+                [r, 0.25 * r],
+                [-r, 0.25 * r],
+            ];
+            let (v, i) =
+                rapier_touch::geometry::generators::extruded_polygon(&outline, 2.0 * r).unwrap();
+            let volume = (2.0 * r * 1.25 * r - r * r) * 2.0 * r;
+            (ColliderBuilder::trimesh(v, i).unwrap(), volume)
+        }
     };
     let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
         0.0,
@@ -88,7 +118,13 @@ fn drop(body: Body, mass: f32, height: f32, k: f32, substeps: u32) -> Drop {
         let reaction = set.tool_reaction(ball).unwrap();
         let now = reaction.held_vertices + reaction.pressed_points > 0;
         if now && !touched {
-            run.impact = -before;
+            // Touching within the first step (a drop of a millimetre), the body had no speed
+            // before it: its speed at the plate is free fall's over the drop.
+            run.impact = if s == 0 {
+                (2.0 * world.gravity.length() * height).sqrt()
+            } else {
+                -before
+            };
             touched = true;
         }
         if touching && !now {
@@ -151,9 +187,10 @@ fn check(body: Body, mass: f32, height: f32, k: f32, substeps: u32) -> Result<()
     if period > 1.5 {
         return Ok(());
     }
-    // A cube wedged in a funnel deeper than itself is not asked to rest (see the cubes' test).
+    // A cube, a dumbbell or a U wedged in a funnel deeper than itself (16 cm) is not asked to
+    // rest (see the cubes' test).
     let sag = mass * 9.81 / centre_stiffness(k);
-    if body == Body::Cube && sag > 0.16 {
+    if body != Body::Ball && sag > 0.16 {
         return Ok(());
     }
     if d.bouncing >= 1e-2 {
@@ -187,6 +224,18 @@ fn drops_at_the_corners_of_the_ranges() {
         failed.len(),
         failed.join("\n")
     );
+}
+
+/// A case the compounds' and TriMeshes' property test found (`PROPTEST_RNG_SEED=3`): a 12 g U
+/// dropped 1.73 m onto 71 N/m edges, at rest on its legs after 9 s, lost all support for one
+/// step (parry's contact query gave one of its triangle points a zero normal where the two
+/// touched exactly, and that one invalid press failed every press of the substep), fell
+/// 2.7 mm into the plate and was thrown about at 16 cm/s.
+#[test]
+fn a_light_u_resting_on_its_legs_never_loses_its_support() {
+    if let Err(e) = check(Body::U, 0.011918696, 1.7270335, 71.453514, 1) {
+        panic!("{e}");
+    }
 }
 
 /// [`check`] of a drawn case: mass and stiffness as powers of ten, 17 substeps or 1.
@@ -238,6 +287,28 @@ proptest! {
         seventeen in any::<bool>(),
     ) {
         if let Err(e) = check_drawn(Body::Cube, log_mass, height, log_k, seventeen) {
+            prop_assert!(false, "{}", e);
+        }
+    }
+
+    /// A compound (a dumbbell: two balls and a bar) and a non-convex TriMesh (a U, legs down)
+    /// as dynamic tools, each part's and each triangle's contacts in one solve with the body's
+    /// mass: the same conditions as the balls', rest asked where the cubes' is. Measured when
+    /// added (before, no test dropped either): 96 drops at 1 g, 30 g, 1, 3 and 10 kg from 5 cm
+    /// and 2 m on 30-1000 N/m with 1 and 17 substeps all held but one, a 10 kg U from 2 m on
+    /// 100 N/m, 17 substeps, which sags 28 cm, a funnel deeper than itself, and still rocks
+    /// at 1.4 cm/s after 10 s (the cubes' limitation, and exempt by the same rule). Seed 3 then
+    /// found a light U that lost its support for a step at rest (the test above).
+    #[test]
+    fn dropped_compounds_and_trimeshes_create_no_energy_never_pass_and_come_to_rest(
+        u_shape in any::<bool>(),
+        log_mass in -3.0f32..1.0,
+        height in 0.001f32..2.0,
+        log_k in 1.0f32..3.0,
+        seventeen in any::<bool>(),
+    ) {
+        let body = if u_shape { Body::U } else { Body::Dumbbell };
+        if let Err(e) = check_drawn(body, log_mass, height, log_k, seventeen) {
             prop_assert!(false, "{}", e);
         }
     }

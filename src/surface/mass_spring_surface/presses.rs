@@ -337,6 +337,12 @@ impl MassSpringSurface {
         Ok(out)
     }
 
+    /// Whether [`MassSpringSurface::press_points`] takes `press` (the checks its errors
+    /// list), for a caller that drops a bad press rather than the whole call.
+    pub(crate) fn press_is_valid(&self, press: &PointPress<'_>) -> bool {
+        self.point_hold(press).is_ok()
+    }
+
     /// A press checked and normalised.
     fn point_hold(&self, p: &PointPress<'_>) -> Result<PointHold, SurfaceError> {
         let vertices = p.vertices;
