@@ -550,7 +550,28 @@ pub(super) fn hold_vertices(
         } else {
             // Sliding: the tool sets the normal velocity only.
             let v_own = surface.velocity(iu);
-            v_own - n * v_own.dot(n) + n * tool_velocity.dot(n)
+            let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
+            // A vertex held since the last substep and put back on the tool along another
+            // direction than the normal (under an edge or a corner, back onto the face it
+            // slid off) also loses what it has of motion into the tool along that move: kept,
+            // that motion carried it back in at every substep, and back out by position
+            // alone, for good (a U's leg held a vertex on its wall that slid down at
+            // 0.25 m/s while a neighbour see-sawed up at the same speed, and neither moved:
+            // their dampers took 1 N of a 10 N press from the tool's reaction). Inelastic: it
+            // only takes energy out. (A vertex entering is left as it was: its way out is
+            // walked back along its motion.)
+            let moved = out - *p;
+            match moved.try_normalize() {
+                Some(d) if !entering && moved.length() > margin => {
+                    let into = (v - tool_velocity).dot(d);
+                    if into < 0.0 {
+                        v - d * into
+                    } else {
+                        v
+                    }
+                }
+                _ => v,
+            }
         };
         if surface.set_state(iu, out, v).is_ok() {
             let _ = if stuck.is_some() {
