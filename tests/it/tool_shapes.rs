@@ -128,22 +128,28 @@ fn height_under(s: &MassSpringSurface, x: f32, z: f32) -> f32 {
     panic!("({x}, {z}) is off the plate");
 }
 
-/// The checks every pressed tool must pass; `inside` tells how deep a world point is inside
-/// the tool (0 outside), `dents`: world points (x, z) under each leg or jaw.
-fn check(r: &Pressed, inside: impl Fn(Vector) -> f32, dents: &[(f32, f32)], name: &str) {
-    let reaction = r.set.tool_reaction(r.tool).unwrap();
+/// The tool's force balances the pins' reaction (the springs' pull on the pinned vertices)
+/// within `share` of it.
+fn balances_the_pins(r: &Pressed, share: f32, name: &str) {
+    let force = r.set.tool_reaction(r.tool).unwrap().force;
     let s = &r.set.get(r.surface).unwrap().surface;
-    let force = reaction.force;
-    assert!(force.y > 0.0, "{name}: {reaction:?}");
-    // The pins' reaction: the springs' pull on the pinned vertices.
     let pins: Vector = plate_rim(CELLS, CELLS)
         .into_iter()
         .map(|i| s.internal_force(i))
         .sum();
     assert!(
-        (force + pins).length() <= 0.05 * force.length(),
+        (force + pins).length() <= share * force.length(),
         "{name}: tool {force:?} vs pins {pins:?}"
     );
+}
+
+/// The checks every pressed tool must pass; `inside` tells how deep a world point is inside
+/// the tool (0 outside), `dents`: world points (x, z) under each leg or jaw.
+fn check(r: &Pressed, inside: impl Fn(Vector) -> f32, dents: &[(f32, f32)], name: &str) {
+    let reaction = r.set.tool_reaction(r.tool).unwrap();
+    let s = &r.set.get(r.surface).unwrap().surface;
+    assert!(reaction.force.y > 0.0, "{name}: {reaction:?}");
+    balances_the_pins(r, 0.05, name);
     for i in 0..s.num_vertices() as u32 {
         let depth = inside(s.position(i));
         assert!(
@@ -356,15 +362,7 @@ fn a_vertex_held_on_a_legs_wall_comes_to_rest_and_the_forces_balance() {
         .map(|i| s.velocity(i).length())
         .fold(0.0, f32::max);
     assert!(fastest < 1e-3, "a vertex still moves at {fastest} m/s");
-    let force = r.set.tool_reaction(r.tool).unwrap().force;
-    let pins: Vector = plate_rim(CELLS, CELLS)
-        .into_iter()
-        .map(|i| s.internal_force(i))
-        .sum();
-    assert!(
-        (force + pins).length() <= 0.01 * force.length(),
-        "tool {force:?} vs pins {pins:?}"
-    );
+    balances_the_pins(&r, 0.01, "U on a wall-held vertex");
 }
 
 /// The U (legs down, and tilted to come down corner-first) and the two jaws, frictionless and
