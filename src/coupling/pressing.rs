@@ -171,29 +171,32 @@ pub(super) fn press_all(
         })
         .collect();
     // The geometry layer's contacts are finite, with unit normals and weights on existing
-    // vertices. One that is not (a bug) is left out, reported, and costs no other press: a
-    // single bad press fails `press_points` as a whole, and a contact with a zero normal once
-    // took every press of a substep with it (a resting body fell a step's worth into the
-    // surface).
-    let valid: Vec<bool> = presses.iter().map(|p| surface.press_is_valid(p)).collect();
-    let bad = valid.iter().filter(|v| !**v).count();
-    if bad > 0 {
-        log::warn!("rapier_touch: {bad} invalid surface contact(s) left out of a substep");
-    }
-    let kept: Vec<PointPress<'_>> = presses
-        .iter()
-        .zip(&valid)
-        .filter(|(_, v)| **v)
-        .map(|(p, _)| *p)
-        .collect();
-    let Ok(kept_ids) = surface.press_points(&kept) else {
-        return Vec::new();
+    // vertices. One that is not (a bug) fails `press_points` as a whole, which presses nothing
+    // (a contact with a zero normal once took every press of a substep with it: a resting body
+    // fell a step's worth into the surface). Then the invalid ones are left out, reported, and
+    // the rest pressed; the usual call checks each press once.
+    let ids = match surface.press_points(&presses) {
+        Ok(ids) => ids,
+        Err(_) => {
+            let valid: Vec<bool> = presses.iter().map(|p| surface.press_is_valid(p)).collect();
+            let bad = valid.iter().filter(|v| !**v).count();
+            log::warn!("rapier_touch: {bad} invalid surface contact(s) left out of a substep");
+            let kept: Vec<PointPress<'_>> = presses
+                .iter()
+                .zip(&valid)
+                .filter(|(_, v)| **v)
+                .map(|(p, _)| *p)
+                .collect();
+            let Ok(kept_ids) = surface.press_points(&kept) else {
+                return Vec::new();
+            };
+            let mut kept_ids = kept_ids.into_iter();
+            valid
+                .iter()
+                .map(|&v| if v { kept_ids.next().flatten() } else { None })
+                .collect()
+        }
     };
-    let mut kept_ids = kept_ids.into_iter();
-    let ids: Vec<Option<usize>> = valid
-        .iter()
-        .map(|&v| if v { kept_ids.next().flatten() } else { None })
-        .collect();
     for ((c, id), owner) in contacts.iter().zip(&ids).zip(owners) {
         let Some(id) = *id else {
             continue;
