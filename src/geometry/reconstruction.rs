@@ -65,7 +65,7 @@ mod workspace;
 
 use convex::*;
 use events::*;
-pub(crate) use primitives::{edge_edge, ray_triangle, tri_normal};
+pub(crate) use primitives::{edge_edge, ray_triangle};
 use workspace::Workspace;
 
 /// Why a reconstruction could not run.

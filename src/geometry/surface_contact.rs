@@ -29,7 +29,7 @@
 //! tool's centre at the start of the substep. Flat tool edges (the diagonals of a triangulated
 //! face) are skipped: a face is held through its vertices and its real edges.
 
-use super::reconstruction::{edge_edge, ray_triangle, tri_normal};
+use super::reconstruction::{edge_edge, ray_triangle};
 use super::touch_mesh::{Feature, TouchMesh};
 use crate::math::{Pose, Real, Vector};
 use glamx::DVec3;
@@ -144,11 +144,6 @@ const SMOOTH_NEAR_EDGE: f64 = 0.1;
 /// Smallest sine of the angle between a tool edge and a surface edge for an edge-edge contact.
 const MIN_EDGE_SINE: f64 = 0.1;
 
-/// The unit normal of a triangle, `None` for a degenerate one.
-fn unit_normal(t: &[DVec3; 3]) -> Option<DVec3> {
-    Some(tri_normal(t)).filter(|n| *n != DVec3::ZERO)
-}
-
 /// The contacts of `tool` (moving from `start` to `end`, poses in the surface's frame) with the
 /// candidate triangles of `surface` (see the module docs), appended to `out`. Each tool vertex
 /// gets at most one contact (the triangle it is most inside); each tool edge one per surface
@@ -193,20 +188,23 @@ pub fn tool_surface_contacts(
 ) {
     let margin = margin.max(0.0) as f64;
     let centre = start.transform_point(tool.local_aabb().center()).as_dvec3();
-    let tool_end: Vec<DVec3> = tool
+    // The tool's vertices at the end and at the start of the substep.
+    let (tool_end, tool_start): (Vec<DVec3>, Vec<DVec3>) = tool
         .vertices()
         .iter()
-        .map(|v| end.transform_point(*v).as_dvec3())
-        .collect();
-    let tool_start: Vec<DVec3> = tool
-        .vertices()
-        .iter()
-        .map(|v| start.transform_point(*v).as_dvec3())
-        .collect();
+        .map(|v| {
+            (
+                end.transform_point(*v).as_dvec3(),
+                start.transform_point(*v).as_dvec3(),
+            )
+        })
+        .unzip();
     // Per candidate triangle: its vertices and corners now, the unit normal toward the tool,
     // how far its points moved over the substep, its area normal toward the tool, and its
-    // bounds now.
+    // bounds now. Also the bounds of them all, grown by the farthest any moved.
     let mut tris = Vec::with_capacity(candidates.len());
+    let mut all_tris = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    let mut max_moved: f64 = 0.0;
     for &t in candidates {
         let (Some(now), Some(before), Some(&idx)) = (
             surface.tri(surface.now, t),
@@ -215,23 +213,36 @@ pub fn tool_surface_contacts(
         ) else {
             continue;
         };
-        let (Some(n), Some(nb)) = (unit_normal(&now), unit_normal(&before)) else {
+        // The two cross products once each: the unit normal now is the area normal over its
+        // length, and the side of the tool's centre only needs the sign along the one before
+        // (a triangle with zero or non-finite area now or before is skipped).
+        let area = (now[1] - now[0]).cross(now[2] - now[0]);
+        let area_before = (before[1] - before[0]).cross(before[2] - before[0]);
+        let (rcp, rcp_before) = (area.length_recip(), area_before.length_recip());
+        if !(rcp.is_finite() && rcp > 0.0 && rcp_before.is_finite() && rcp_before > 0.0) {
             continue;
-        };
-        let sign = if (centre - before[0]).dot(nb) >= 0.0 {
+        }
+        let n = area * rcp;
+        let sign = if (centre - before[0]).dot(area_before) >= 0.0 {
             1.0
         } else {
             -1.0
         };
+        // The largest of the three displacements (one square root).
         let moved = (0..3)
-            .map(|k| (now[k] - before[k]).length())
-            .fold(0.0, f64::max);
-        let area_normal = (now[1] - now[0]).cross(now[2] - now[0]) * sign;
+            .map(|k| (now[k] - before[k]).length_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
         let bounds = (
             now[0].min(now[1]).min(now[2]),
             now[0].max(now[1]).max(now[2]),
         );
-        tris.push((idx, now, n * sign, moved, area_normal, bounds));
+        all_tris = (all_tris.0.min(bounds.0), all_tris.1.max(bounds.1));
+        max_moved = max_moved.max(moved);
+        tris.push((idx, now, n * sign, moved, area * sign, bounds));
+    }
+    if tris.is_empty() {
+        return;
     }
     // The area-weighted normal of the candidate region at vertex `v`, toward the tool (asked
     // for a few vertices per call: summed where asked rather than kept for every vertex).
@@ -258,6 +269,12 @@ pub fn tool_surface_contacts(
         let feature = Feature::Vertex(v as u32);
         let mut best: Option<(f64, SurfaceContact)> = None;
         let travel = (p1 - p0).length() + margin;
+        // Farther from all the triangles' bounds than any of the tests below reaches: none.
+        let reach_all =
+            DVec3::splat(travel + max_moved + 1e-6 * (all_tris.1 - all_tris.0).max_element());
+        if (all_tris.0 - reach_all).cmpgt(p1).any() || p1.cmpgt(all_tris.1 + reach_all).any() {
+            continue;
+        }
         for (idx, now, n, moved, _, (lo, hi)) in &tris {
             let h1 = (p1 - now[0]).dot(*n);
             if h1.abs() > travel + moved {
@@ -324,7 +341,7 @@ pub fn tool_surface_contacts(
     for (idx, now, n, moved, _, _) in &tris {
         for k in 0..3 {
             let (i, j) = (idx[k], idx[(k + 1) % 3]);
-            if seen.insert((i.min(j), i.max(j))) {
+            if seen.insert((u64::from(i.min(j)) << 32) | u64::from(i.max(j))) {
                 let (q0, q1) = (now[k], now[(k + 1) % 3]);
                 let grown = DVec3::splat(*moved);
                 let (q_lo, q_hi) = (q0.min(q1) - grown, q0.max(q1) + grown);

@@ -21,7 +21,8 @@ pub(crate) fn ray_triangle(
     let e2 = t[2] - t[0];
     let h = d.cross(e2);
     let det = e1.dot(h);
-    if det.abs() <= 1e-10 * e1.length() * e2.length() {
+    // |det| ≤ 1e-10 |e1| |e2|, squared (no square roots).
+    if det * det <= 1e-20 * e1.length_squared() * e2.length_squared() {
         return None;
     }
     let inv = 1.0 / det;
