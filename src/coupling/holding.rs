@@ -1,21 +1,20 @@
-//! How rigid tools hold the vertices of a surface in one surface substep: the surface steps,
-//! then every vertex inside a tool is walked back along its inverse trajectory relative to the
-//! tool to the tool's boundary and held there (a moving pin inside the filter), and each tool
-//! gets the reaction of the vertices it holds.
+//! One surface substep with its tools: the surface steps, then every vertex inside a tool is
+//! walked back to the tool's boundary and held there (a moving pin inside the filter,
+//! [`super::vertex_holds`]), the tools' sharp features press between the vertices
+//! ([`super::pressing`]), and each tool gets the reaction of what it holds and presses.
 
 use super::dynamic_tools::{
     depths_now, move_on, press_dynamic, set_holders, within_slop, DynamicTool,
 };
-use super::friction::{settle, Contact, Friction, Settled, Sticks};
+use super::friction::Friction;
 use super::pressing::{
     add_grasped, find_contacts, part_query, press_all, reaction_of, record_grasped,
     record_impulses, Grasper, PressOwner,
 };
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::{contact_margin, ToolShape};
-use crate::geometry::tool_boundary::{
-    distance_outside, exit_along, nearest_on_boundary, outward_normal,
-};
+use super::vertex_holds::hold_vertices;
+use crate::geometry::tool_boundary::distance_outside;
 use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
@@ -426,228 +425,4 @@ pub(super) fn lerp_pose(a: &Pose, b: &Pose, t: Real) -> Pose {
         a.translation.lerp(b.translation, t),
         a.rotation.slerp(b.rotation, t),
     )
-}
-
-/// What one tool's holds give back: the force on the tool, `Σ p × f` (surface frame), how many
-/// vertices it holds and how many of those stick to it.
-pub(super) struct Holds {
-    pub force: Vector,
-    pub moment: Vector,
-    pub count: usize,
-    pub sticking: usize,
-    /// The vertices held at the end.
-    pub vertices: Vec<u32>,
-    /// Each held vertex's position and the force it puts on the tool (surface frame), when
-    /// asked to record them.
-    pub contacts: Vec<(Vector, Vector)>,
-}
-
-/// Moves every surface vertex the tool contains out of it and holds it there (see [`Holds`]).
-///
-/// A vertex that just entered is walked back along its inverse trajectory relative to the tool
-/// (eq. 1-2 for one vertex): from where it is, back along its own motion over the substep minus
-/// the tool's, to the tool's boundary. A vertex already in contact slides: it is snapped to the
-/// nearest boundary point, keeps its own tangential velocity and takes the tool's normal
-/// velocity. With friction ([`super::friction`]) a vertex that sticks is carried by the tool's
-/// material point it stuck to, with that point's whole velocity, until its tangential force
-/// passes the static limit; a slipping vertex is pulled back by kinetic friction. A grasping
-/// tool keeps every vertex it touches stuck, pulled or pushed, until it lets go.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn hold_vertices(
-    (tool, friction, grasp, record, sticks): (ColliderHandle, Friction, bool, bool, &mut Sticks),
-    follow: bool,
-    surface: &mut MassSpringSurface,
-    shape: &dyn parry3d::shape::Shape,
-    pose: &Pose,
-    before: &Pose,
-    h: Real,
-    prev_positions: &[Vector],
-    was_held: &[bool],
-    (positions, candidates): (&[Vector], &[u32]),
-) -> Holds {
-    let aabb: Aabb = shape.compute_aabb(pose);
-    let margin = contact_margin(&aabb, 1e-4);
-    let aabb = aabb.loosened(margin);
-    let motion = pose.translation - before.translation;
-    // The velocity of the tool's material point at `local` (tool frame) over the substep.
-    let material_velocity = |local: Vector| {
-        if h > 0.0 {
-            (pose.transform_point(local) - before.transform_point(local)) / h
-        } else {
-            Vector::ZERO
-        }
-    };
-    // A vertex held in the last substep moved on with the tool's old normal velocity; when the
-    // tool slowed down or turned back, that leaves it outside by up to the relative motion over
-    // the substep. It is still in contact (and snapped back) unless its springs pull it away
-    // (the push-only test below).
-    // (vertex, normal, contact point in the tool's frame, stuck in the last substep)
-    let mut held: Vec<(u32, Vector, Vector, bool)> = Vec::new();
-    // (vertex, its free position and velocity) for vertices that followed the tool.
-    let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
-    for &iu in candidates {
-        let i = iu as usize;
-        let Some(p) = positions.get(i) else {
-            continue;
-        };
-        let entering = !was_held.get(i).copied().unwrap_or(false);
-        let chase = follow && !entering;
-        let own = prev_positions.get(i).map_or(Vector::ZERO, |q| *p - *q);
-        let slack = if chase {
-            own.length() + 2.0 * motion.length() + margin
-        } else {
-            0.0
-        };
-        let near = p.cmpge(aabb.mins - Vector::splat(slack)).all()
-            && p.cmple(aabb.maxs + Vector::splat(slack)).all();
-        if !near || surface.is_pinned(iu) || surface.is_held(iu) {
-            continue;
-        }
-        let rel = motion - own;
-        // In contact: inside the tool, or on its boundary (where the last substep left a held
-        // vertex) within a hair, or held before and left behind by the relative motion.
-        let gap = distance_outside(shape, pose, *p);
-        if gap > margin {
-            if !chase || gap > rel.length() + motion.length() + margin {
-                continue;
-            }
-            followed.push((iu, *p, surface.velocity(iu)));
-        }
-        // A vertex stuck to this tool stays on the material point it stuck to.
-        let stuck = match sticks.get(&iu) {
-            Some(&(t, Contact::Stuck(anchor))) if t == tool && !entering => Some(anchor),
-            _ => None,
-        };
-        let (out, local) = match stuck {
-            Some(anchor) => (pose.transform_point(anchor), anchor),
-            None => {
-                let nearest = nearest_on_boundary(shape, pose, *p);
-                // Walked back along its relative motion over the substep, a vertex that came
-                // in leaves where it entered: no farther than that motion (twice, for the arc
-                // a turning tool's point follows). An exit farther away is the far side of a
-                // tool the vertex did not cross this substep: one lying on a face and grazed
-                // along it (a cube dragged over a plate) is "inside" by a rounding error, and
-                // was thrown across the whole cube (a 2 kN spike on a 440 N press).
-                let walk = 2.0 * rel.length() + margin;
-                let out = if entering && rel.length() > (nearest - *p).length() + margin {
-                    exit_along(shape, pose, *p, rel.normalize())
-                        .filter(|q| (*q - *p).length() <= walk)
-                        .unwrap_or(nearest)
-                } else {
-                    nearest
-                };
-                (out, pose.inverse_transform_point(out))
-            }
-        };
-        if !out.is_finite() {
-            continue;
-        }
-        // The tool's outward normal at the contact point.
-        let n = pose.rotation * outward_normal(shape, local, margin);
-        let tool_velocity = material_velocity(local);
-        let v = if stuck.is_some() {
-            tool_velocity
-        } else {
-            // Sliding: the tool sets the normal velocity only.
-            let v_own = surface.velocity(iu);
-            let v = v_own - n * v_own.dot(n) + n * tool_velocity.dot(n);
-            // A vertex held since the last substep and put back on the tool along another
-            // direction than the normal (under an edge or a corner, back onto the face it
-            // slid off) also loses what it has of motion into the tool along that move: kept,
-            // that motion carried it back in at every substep, and back out by position
-            // alone, for good (a U's leg held a vertex on its wall that slid down at
-            // 0.25 m/s while a neighbour see-sawed up at the same speed, and neither moved:
-            // their dampers took 1 N of a 10 N press from the tool's reaction). Inelastic: it
-            // only takes energy out. (A vertex entering is left as it was: its way out is
-            // walked back along its motion.)
-            let moved = out - *p;
-            match moved.try_normalize() {
-                Some(d) if !entering && moved.length() > margin => {
-                    let into = (v - tool_velocity).dot(d);
-                    if into < 0.0 {
-                        v - d * into
-                    } else {
-                        v
-                    }
-                }
-                _ => v,
-            }
-        };
-        if surface.set_state(iu, out, v).is_ok() {
-            let _ = if stuck.is_some() {
-                surface.hold(iu)
-            } else {
-                surface.hold_sliding(iu, n)
-            };
-            held.push((iu, n, local, stuck.is_some()));
-        }
-    }
-    // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
-    // stick to a receding tool) is let go. The others stick or slip (friction), and the tool
-    // receives their spring and damper forces: the normal part, and the tangential part of
-    // those that stick, or kinetic friction for those that slip.
-    let mut out = Holds {
-        force: Vector::ZERO,
-        moment: Vector::ZERO,
-        count: 0,
-        sticking: 0,
-        vertices: Vec::new(),
-        contacts: Vec::new(),
-    };
-    // A vertex moving over the tool slower than this (a millionth of the tool's size per
-    // substep) is at rest on it.
-    let slip_eps = if h > 0.0 {
-        1e-6 * aabb.extents().max_element() / h
-    } else {
-        Real::MAX
-    };
-    for &(i, n, local, was_stuck) in &held {
-        let f = surface.internal_force(i);
-        let (on_tool, next) = if grasp {
-            // Grasped: stuck whatever its springs do, pulled or pushed; the tool feels it all.
-            (f, Settled::Stick)
-        } else if f.dot(n) >= 0.0 {
-            surface.release(i);
-            // A vertex that only followed the tool separates where its own motion took it.
-            if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
-                let _ = surface.set_state(i, p, v);
-            }
-            continue;
-        } else {
-            let was = sticks
-                .get(&i)
-                .filter(|s| s.0 == tool && !friction.is_frictionless())
-                .map(|s| s.1);
-            let relative = surface.velocity(i) - material_velocity(local);
-            let slip = relative - n * relative.dot(n);
-            settle(friction, f, n, was, slip, slip_eps)
-        };
-        match next {
-            Settled::Stick => {
-                if !was_stuck {
-                    // From now on carried by the material point it touches.
-                    let _ = surface.set_state(i, surface.position(i), material_velocity(local));
-                    let _ = surface.hold(i);
-                }
-                sticks.insert(i, (tool, Contact::Stuck(local)));
-                out.sticking += 1;
-            }
-            Settled::Slip { on_vertex, dir } => {
-                let _ = surface.hold_sliding_with_friction(i, n, on_vertex);
-                if !friction.is_frictionless() {
-                    sticks.insert(i, (tool, Contact::Slipping(dir)));
-                }
-            }
-        }
-        out.force += on_tool;
-        out.moment += surface.position(i).cross(on_tool);
-        out.count += 1;
-        out.vertices.push(i);
-        if record {
-            out.contacts.push((surface.position(i), on_tool));
-        }
-    }
-    // This tool's contacts end where it let the vertex go.
-    sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));
-    out
 }

@@ -11,6 +11,7 @@ mod pressing;
 mod search;
 mod surface_set;
 mod tool_shape;
+mod vertex_holds;
 
 pub use events::ToolTouchEvent;
 pub use friction::Friction;
