@@ -66,8 +66,9 @@ pub(super) fn hold_vertices(
     // tool slowed down or turned back, that leaves it outside by up to the relative motion over
     // the substep. It is still in contact (and snapped back) unless its springs pull it away
     // (the push-only test below).
-    // (vertex, normal, contact point in the tool's frame, stuck in the last substep)
-    let mut held: Vec<(u32, Vector, Vector, bool)> = Vec::new();
+    // (vertex, normal, contact point in the tool's frame, stuck in the last substep, the way
+    // from the tool to a vertex found outside it)
+    let mut held: Vec<(u32, Vector, Vector, bool, Option<Vector>)> = Vec::new();
     // (vertex, its free position and velocity) for vertices that followed the tool.
     let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
     for &iu in candidates {
@@ -164,7 +165,11 @@ pub(super) fn hold_vertices(
             } else {
                 surface.hold_sliding(iu, n)
             };
-            held.push((iu, n, local, stuck.is_some()));
+            // A vertex the tool left behind (outside it) is away from it along the way back
+            // from the tool's nearest point, which under an edge or a corner is not the
+            // face's normal `n`.
+            let away = (gap > margin).then(|| (*p - out).try_normalize()).flatten();
+            held.push((iu, n, local, stuck.is_some(), away));
         }
     }
     // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
@@ -186,12 +191,12 @@ pub(super) fn hold_vertices(
     } else {
         Real::MAX
     };
-    for &(i, n, local, was_stuck) in &held {
+    for &(i, n, local, was_stuck, away) in &held {
         let f = surface.internal_force(i);
         let (on_tool, next) = if grasp {
             // Grasped: stuck whatever its springs do, pulled or pushed; the tool feels it all.
             (f, Settled::Stick)
-        } else if f.dot(n) >= 0.0 {
+        } else if f.dot(n) >= 0.0 || away.is_some_and(|d| f.dot(d) >= 0.0) {
             surface.release(i);
             // A vertex that only followed the tool separates where its own motion took it.
             if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
