@@ -173,7 +173,8 @@ pub(super) fn hold_vertices(
         }
     }
     // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
-    // stick to a receding tool) is let go. The others stick or slip (friction), and the tool
+    // stick to a receding tool) is let go; away is along the normal, and for a vertex found
+    // outside the tool also along the way from the tool to it (under an edge). The others stick or slip (friction), and the tool
     // receives their spring and damper forces: the normal part, and the tangential part of
     // those that stick, or kinetic friction for those that slip.
     let mut out = Holds {
