@@ -544,3 +544,22 @@ fn a_vertex_left_under_a_legs_edge_is_let_go_and_the_forces_balance() {
     free_vertices_away_from_the_tool_balance(&r, "U over a vertex under a leg's edge");
     balances_the_pins(&r, 0.01, "U over a vertex under a leg's edge");
 }
+
+/// A case of the tilted-tools property test (a random seed): the jaws turned 1.61 rad about
+/// the vertical over (0.11, 0), coming down flat. A jaw's face holds the surface vertex under
+/// it and its corner lies in a triangle with 0.83 of its weight on that vertex; the press was
+/// left to the vertex's holder (less than a quarter of its weight on free vertices) and the
+/// corner went 66 µm under the triangle's free side at step 25. It is now pressed while the
+/// way its free vertices must go is short.
+#[test]
+fn a_jaws_corner_beside_a_held_vertex_stays_out_of_its_triangle() {
+    let turn = Rotation::from_rotation_y(1.6115602);
+    let (shape, probes) = jaws();
+    let lowest = probes
+        .iter()
+        .map(|c| (turn * *c).y)
+        .fold(f32::MAX, f32::min);
+    // `press_at` asserts after every step that no probe is under the surface.
+    let r = press_at(shape, turn, lowest, &probes, (0.110015064, 0.0));
+    check(&r, inside_of(&r), &[], "jaws over (0.11, 0)");
+}

@@ -12,6 +12,12 @@ use glamx::DVec3;
 
 /// The least weight a pressed point must have on vertices that can move.
 const MIN_MOVABLE_WEIGHT: f64 = 0.25;
+/// Below [`MIN_MOVABLE_WEIGHT`], a point is still pressed while the way its free vertices must
+/// go (its depth over their weight) is at most this share of its vertices' span, and their
+/// weight at least [`LEAST_MOVABLE_WEIGHT`].
+const MAX_LEVERED_SHARE: f64 = 0.05;
+/// The weight on movable vertices below which a point is always left to its other vertices.
+const LEAST_MOVABLE_WEIGHT: f64 = 0.02;
 
 /// One point to press (see [`MassSpringSurface::press_points`]).
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -217,13 +223,28 @@ impl MassSpringSurface {
         let mut kept: Vec<(PointHold, f64, f64)> = Vec::new();
         for (hold, p) in holds.into_iter().zip(presses) {
             // The weight on vertices that can move: a point mostly on pinned or held vertices
-            // is carried by them (moving it would fling its free vertex by depth / weight).
+            // is carried by them where moving it would fling its free vertices (by depth /
+            // weight). A tool's corner beside a vertex its face holds has most of its weight
+            // there, and left alone it sank under the triangle's free side (66 µm, a jaw's
+            // corner with 0.83 of its weight on the held vertex): pressed while that way is
+            // short. (Not for a rigid holder's points, whose solve meets its mass: pressed so,
+            // dynamic bodies on soft plates lost their balance and their rolling.)
             let movable: f64 = hold
                 .entries()
                 .filter(|&(v, _)| inv_mass(self, v) > 0.0)
                 .map(|(_, w)| w)
                 .sum();
-            if movable >= MIN_MOVABLE_WEIGHT {
+            let levered = || {
+                let span = hold
+                    .entries()
+                    .flat_map(|(a, _)| hold.entries().map(move |(b, _)| (a as usize, b as usize)))
+                    .map(|(a, b)| (self.pos[a] - self.pos[b]).length())
+                    .fold(0.0, f64::max);
+                hold.holder.is_none()
+                    && movable >= LEAST_MOVABLE_WEIGHT
+                    && f64::from(p.depth).max(0.0) <= MAX_LEVERED_SHARE * span * movable
+            };
+            if movable >= MIN_MOVABLE_WEIGHT || levered() {
                 let velocity: f64 = hold
                     .entries()
                     .map(|(v, w)| w * self.vel[v as usize].dot(hold.normal))
