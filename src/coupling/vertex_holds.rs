@@ -128,8 +128,9 @@ pub(super) fn hold_vertices(
         if !out.is_finite() {
             continue;
         }
-        // The tool's outward normal at the contact point.
+        // The tool's outward normal at the contact point, and the vertex's way back onto it.
         let n = pose.rotation * outward_normal(shape, local, margin);
+        let moved = out - *p;
         let tool_velocity = material_velocity(local);
         let v = if stuck.is_some() {
             tool_velocity
@@ -146,7 +147,6 @@ pub(super) fn hold_vertices(
             // their dampers took 1 N of a 10 N press from the tool's reaction). Inelastic: it
             // only takes energy out. (A vertex entering is left as it was: its way out is
             // walked back along its motion.)
-            let moved = out - *p;
             match moved.try_normalize() {
                 Some(d) if !entering && moved.length() > margin => {
                     let into = (v - tool_velocity).dot(d);
@@ -168,15 +168,16 @@ pub(super) fn hold_vertices(
             // A vertex the tool left behind (outside it) is away from it along the way back
             // from the tool's nearest point, which under an edge or a corner is not the
             // face's normal `n`.
-            let away = (gap > margin).then(|| (*p - out).try_normalize()).flatten();
+            let away = (gap > margin).then(|| (-moved).try_normalize()).flatten();
             held.push((iu, n, local, stuck.is_some(), away));
         }
     }
     // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
     // stick to a receding tool) is let go; away is along the normal, and for a vertex found
-    // outside the tool also along the way from the tool to it (under an edge). The others stick or slip (friction), and the tool
-    // receives their spring and damper forces: the normal part, and the tangential part of
-    // those that stick, or kinetic friction for those that slip.
+    // outside the tool also along the way from the tool to it (under an edge). The others
+    // stick or slip (friction), and the tool receives their spring and damper forces: the
+    // normal part, and the tangential part of those that stick, or kinetic friction for those
+    // that slip.
     let mut out = Holds {
         force: Vector::ZERO,
         moment: Vector::ZERO,

@@ -234,15 +234,17 @@ impl MassSpringSurface {
                 .filter(|&(v, _)| inv_mass(self, v) > 0.0)
                 .map(|(_, w)| w)
                 .sum();
+            // (The vertices' span only for the few points that get this far.)
             let levered = || {
+                if hold.holder.is_some() || movable < LEAST_MOVABLE_WEIGHT {
+                    return false;
+                }
                 let span = hold
                     .entries()
                     .flat_map(|(a, _)| hold.entries().map(move |(b, _)| (a as usize, b as usize)))
                     .map(|(a, b)| (self.pos[a] - self.pos[b]).length())
                     .fold(0.0, f64::max);
-                hold.holder.is_none()
-                    && movable >= LEAST_MOVABLE_WEIGHT
-                    && f64::from(p.depth).max(0.0) <= MAX_LEVERED_SHARE * span * movable
+                f64::from(p.depth).max(0.0) <= MAX_LEVERED_SHARE * span * movable
             };
             if movable >= MIN_MOVABLE_WEIGHT || levered() {
                 let velocity: f64 = hold
