@@ -215,6 +215,24 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         if ph == ch || partner.parent() == Some(bh) {
                             continue;
                         }
+                        // A dynamic partner that moved less than the pair's safe step relative
+                        // to this body is left to rapier's solver (below), decided before its
+                        // contact points are read: most of a pile's swept partners are such
+                        // neighbours.
+                        if partner
+                            .parent()
+                            .and_then(|pb| world.bodies.get(pb))
+                            .is_some_and(|b| b.is_dynamic())
+                        {
+                            let Some(pm) = self.hooks.meshes.get(&ph) else {
+                                continue;
+                            };
+                            let dp =
+                                body_motion(&self.hooks.prev_poses, &world.bodies, partner.parent());
+                            if (d - dp).length() < safe_step(&mesh, &pm.mesh) {
+                                continue;
+                            }
+                        }
                         // Only pairs rapier itself would solve (sensors, groups, disabled
                         // colliders, collision types and the user's pair filter are rapier's
                         // say), asked in rapier's own pair order when it has the pair. rapier
