@@ -3,7 +3,7 @@
 //! All meshes are closed, edge-manifold, welded, and wound counter-clockwise seen from outside.
 
 use crate::math::{Real, Vector};
-use std::collections::HashMap;
+use parry3d::utils::hashmap::HashMap;
 
 /// A vertex and an index buffer.
 pub type MeshBuffers = (Vec<Vector>, Vec<[u32; 3]>);
@@ -18,7 +18,7 @@ pub type MeshBuffers = (Vec<Vector>, Vec<[u32; 3]>);
 /// ```
 pub fn subdivided_box(half_extents: Vector, n: u32) -> MeshBuffers {
     let n = n.max(1) as i32;
-    let mut map: HashMap<[i32; 3], u32> = HashMap::new();
+    let mut map: HashMap<[i32; 3], u32> = HashMap::default();
     let mut verts = Vec::new();
     let mut idx = Vec::new();
     let mut vid = |g: [i32; 3], verts: &mut Vec<Vector>| -> u32 {
@@ -103,7 +103,7 @@ pub fn icosphere(radius: Real, subdivisions: u32) -> MeshBuffers {
         [9, 8, 1],
     ];
     for _ in 0..subdivisions {
-        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::default();
         let mut midpoint = |a: u32, b: u32, verts: &mut Vec<Vector>| -> u32 {
             let key = (a.min(b), a.max(b));
             *mid.entry(key).or_insert_with(|| {

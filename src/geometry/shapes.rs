@@ -6,7 +6,7 @@ use super::touch_mesh::{TouchMesh, TouchMeshError};
 use crate::math::{Real, Vector};
 use parry3d::bounding_volume::Aabb;
 use parry3d::shape::{Shape, TypedShape};
-use std::collections::HashMap;
+use parry3d::utils::hashmap::HashMap;
 
 /// Subdivisions of the curved shapes (parry's `to_trimesh` arguments).
 const BALL_SUBDIV: (u32, u32) = (16, 16);
@@ -155,7 +155,7 @@ fn shape_buffers(shape: &dyn Shape) -> Result<MeshBuffers, TouchMeshError> {
 fn hull(points: &[Vector]) -> Result<MeshBuffers, TouchMeshError> {
     let tris = convex_hull(points)
         .map_err(|e| TouchMeshError::Parry(format!("convex hull failed: {e:?}")))?;
-    let mut new_index = HashMap::new();
+    let mut new_index = HashMap::default();
     let mut v = Vec::new();
     let tris = tris
         .iter()

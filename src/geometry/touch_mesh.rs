@@ -8,7 +8,7 @@ use convex::{convex_data, ConvexData};
 use parry3d::bounding_volume::Aabb;
 use parry3d::partitioning::Bvh;
 use parry3d::shape::{ShapeType, TriMesh, TriMeshFlags};
-use std::collections::HashMap;
+use parry3d::utils::hashmap::HashMap;
 use weld::WELD_RELATIVE_TOLERANCE;
 
 /// Why a [`TouchMesh`] could not be built. Each variant says how to fix the input.
@@ -237,7 +237,8 @@ impl TouchMesh {
         // Flat: the height over the longest edge is below `1e-7 ×` the extent (in `f64`, so
         // the test is the same at every scale).
         let flat = 1.0e-7 * extent as f64;
-        let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(indices.len());
+        let mut seen: HashMap<[u32; 3], ()> =
+            HashMap::with_capacity_and_hasher(indices.len(), Default::default());
         let mut kept = Vec::with_capacity(indices.len());
         let mut tri_to_user = Vec::with_capacity(indices.len());
         let mut dropped = Vec::new();
@@ -272,7 +273,8 @@ impl TouchMesh {
     fn with_adjacency(trimesh: TriMesh, tri_to_user: Vec<u32>, dropped: Vec<u32>) -> Self {
         let idx = trimesh.indices();
         let nv = trimesh.vertices().len();
-        let mut edge_map: HashMap<[u32; 2], u32> = HashMap::with_capacity(idx.len() * 2);
+        let mut edge_map: HashMap<[u32; 2], u32> =
+            HashMap::with_capacity_and_hasher(idx.len() * 2, Default::default());
         let mut edges = Vec::with_capacity(idx.len() * 3 / 2 + 1);
         let mut edge_tris: Vec<[u32; 2]> = Vec::with_capacity(edges.capacity());
         let mut edge_count: Vec<u32> = Vec::with_capacity(edges.capacity());

@@ -2,7 +2,7 @@
 //! tools and parry's height-field and voxel conversions give it) becomes one connected surface.
 
 use crate::math::{Real, Vector};
-use std::collections::HashMap;
+use parry3d::utils::hashmap::HashMap;
 
 /// Vertices closer than this fraction of the bounding-box diagonal are welded (see
 /// [`TouchMesh::new`](super::TouchMesh::new)).
@@ -30,7 +30,8 @@ pub(super) fn weld_map(vertices: &[Vector], used: &[bool], tol: Real) -> Vec<u32
     let cell = (2.0 * tol).max(Real::MIN_POSITIVE) as f64;
     let tol2 = (tol as f64) * (tol as f64);
     // Representatives by cell, as linked lists: `head[cell]` then `next[v]`.
-    let mut head: HashMap<[i64; 3], u32> = HashMap::with_capacity(vertices.len());
+    let mut head: HashMap<[i64; 3], u32> =
+        HashMap::with_capacity_and_hasher(vertices.len(), Default::default());
     let mut next = vec![u32::MAX; vertices.len()];
     for (v, p) in vertices.iter().enumerate() {
         if !used[v] {

@@ -227,8 +227,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             let Some(pm) = self.hooks.meshes.get(&ph) else {
                                 continue;
                             };
-                            let dp =
-                                body_motion(&self.hooks.prev_poses, &world.bodies, partner.parent());
+                            let dp = body_motion(
+                                &self.hooks.prev_poses,
+                                &world.bodies,
+                                partner.parent(),
+                            );
                             if (d - dp).length() < safe_step(&mesh, &pm.mesh) {
                                 continue;
                             }
