@@ -79,348 +79,64 @@ use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::surface::meshing::{plate, plate_rim, SurfaceMesh};
 use std::time::Instant;
 
-#[path = "common/progress.rs"]
+#[path = "../common/progress.rs"]
 mod progress;
+mod runs;
+mod scene;
+
+use runs::*;
+use scene::*;
 
 /// Side of the square plate (m).
-const SIZE: Real = 0.3;
+pub(crate) const SIZE: Real = 0.3;
 /// Mass of the whole plate, pinned rim included (kg).
-const TOTAL_MASS: Real = 0.2;
+pub(crate) const TOTAL_MASS: Real = 0.2;
 /// Stiffness of every edge (N/m).
-const K: Real = 30.0;
+pub(crate) const K: Real = 30.0;
 /// Damping of every edge (N·s/m).
-const C: Real = 0.05;
-const TOOL_RADIUS: Real = 0.025;
+pub(crate) const C: Real = 0.05;
+pub(crate) const TOOL_RADIUS: Real = 0.025;
 /// rapier's contact skin (the soft body's particle radius, m).
-const SKIN: Real = 0.001;
+pub(crate) const SKIN: Real = 0.001;
 /// Tool bottom above the plate at the start (m).
-const START_GAP: Real = 0.003;
+pub(crate) const START_GAP: Real = 0.003;
 /// How far the tools press below the plate (m).
-const PRESS_DEPTH: Real = 0.005;
+pub(crate) const PRESS_DEPTH: Real = 0.005;
 /// Time the tools take from the start to full depth (s); they hold from then on.
-const DESCENT: Real = 0.15;
+pub(crate) const DESCENT: Real = 0.15;
 /// The tools' friction coefficient in the rows with friction.
-const MU: Real = 0.5;
+pub(crate) const MU: Real = 0.5;
 /// Larger displacements than this count as unstable (m).
-const STABLE_BOUND: Real = 0.1;
+pub(crate) const STABLE_BOUND: Real = 0.1;
 /// Steps of the free-surface divergence check.
-const CHECK_STEPS: usize = 300;
+pub(crate) const CHECK_STEPS: usize = 300;
 
 /// A time step: value (s), label, number of steps.
-const DTS: [(Real, &str, usize); 2] = [(1.0 / 60.0, "1/60", 60), (1.0 / 1000.0, "1/1000", 300)];
+pub(crate) const DTS: [(Real, &str, usize); 2] =
+    [(1.0 / 60.0, "1/60", 60), (1.0 / 1000.0, "1/1000", 300)];
 
 #[derive(Copy, Clone)]
-struct Config {
-    tools: usize,
-    dt: Real,
-    dt_label: &'static str,
-    steps: usize,
+pub(crate) struct Config {
+    pub(crate) tools: usize,
+    pub(crate) dt: Real,
+    pub(crate) dt_label: &'static str,
+    pub(crate) steps: usize,
     /// The tools' friction coefficient.
-    friction: Real,
+    pub(crate) friction: Real,
 }
 
-struct Row {
-    engine: &'static str,
-    nodes: usize,
-    cfg: Config,
-    ms_per_step: f64,
-    max_displacement: Real,
-    stable: bool,
-    force_available: bool,
+pub(crate) struct Row {
+    pub(crate) engine: &'static str,
+    pub(crate) nodes: usize,
+    pub(crate) cfg: Config,
+    pub(crate) ms_per_step: f64,
+    pub(crate) max_displacement: Real,
+    pub(crate) stable: bool,
+    pub(crate) force_available: bool,
     /// Share of hold steps × tools with a finite nonzero force.
-    force_share: f64,
+    pub(crate) force_share: f64,
     /// Mean upward force on a tool over the hold (N).
-    mean_force_y: f64,
-}
-
-/// The plate mesh and its pinned rim.
-struct Plate {
-    mesh: SurfaceMesh,
-    rim: Vec<u32>,
-}
-
-impl Plate {
-    fn new(cells: u32) -> Self {
-        let mesh = plate(SIZE, SIZE, cells, cells);
-        let rim = plate_rim(cells, cells);
-        Self { mesh, rim }
-    }
-
-    fn nodes(&self) -> usize {
-        self.mesh.num_vertices()
-    }
-
-    /// Mass of one vertex (kg).
-    fn vertex_mass(&self) -> Real {
-        TOTAL_MASS / self.nodes() as Real
-    }
-
-    /// The crate's surface on this plate.
-    fn surface(&self, dt: Real, integrator: Integrator) -> MassSpringSurface {
-        MassSpringSurfaceBuilder::from_mesh(&self.mesh)
-            .stiffness(K)
-            .damping(C)
-            .mass(MassDistribution::Total(TOTAL_MASS))
-            .pinned(self.rim.iter().copied())
-            .dt(dt)
-            .integrator(integrator)
-            .build()
-            .expect("valid plate")
-    }
-}
-
-/// rapier's edge softness `(f Hz, ζ)` for the crate's k and c on an edge between two free
-/// particles of mass m (effective mass m/2).
-fn rapier_softness(m: Real) -> (Real, Real) {
-    let m_eff = 0.5 * m;
-    let f = (K / m_eff).sqrt() / std::f32::consts::TAU;
-    let zeta = C / (2.0 * (K * m_eff).sqrt());
-    (f, zeta)
-}
-
-/// The tools' (x, z) sites.
-fn tool_sites(n: usize) -> Vec<[Real; 2]> {
-    if n == 1 {
-        return vec![[0.0, 0.0]];
-    }
-    let six = [
-        [-0.07, -0.05],
-        [0.0, -0.05],
-        [0.07, -0.05],
-        [-0.07, 0.05],
-        [0.0, 0.05],
-        [0.07, 0.05],
-    ];
-    six[..n.min(6)].to_vec()
-}
-
-/// Height of a tool's bottom at time t (m, y up; the plate lies at y = 0).
-fn tool_bottom(t: Real) -> Real {
-    START_GAP - (START_GAP + PRESS_DEPTH) * (t / DESCENT).clamp(0.0, 1.0)
-}
-
-fn tool_centre(site: [Real; 2], t: Real, lift: Real) -> Vector {
-    Vector::new(site[0], tool_bottom(t) + TOOL_RADIUS + lift, site[1])
-}
-
-/// Kinematic ball tools at their starting poses, `lift` above the crate's path, with friction
-/// `mu` (combined with the other collider's by `Min`).
-fn insert_tools(
-    world: &mut PhysicsWorld,
-    sites: &[[Real; 2]],
-    lift: Real,
-    mu: Real,
-) -> Vec<ColliderHandle> {
-    sites
-        .iter()
-        .map(|site| {
-            let body = world.insert_body(
-                RigidBodyBuilder::kinematic_position_based()
-                    .translation(tool_centre(*site, 0.0, lift)),
-            );
-            world.insert_collider(
-                ColliderBuilder::ball(TOOL_RADIUS)
-                    .friction(mu)
-                    .friction_combine_rule(CoefficientCombineRule::Min),
-                Some(body),
-            )
-        })
-        .collect()
-}
-
-/// Sets every tool's target: its pose at time t (the end of the coming step).
-fn drive_tools(
-    world: &mut PhysicsWorld,
-    tools: &[ColliderHandle],
-    sites: &[[Real; 2]],
-    t: Real,
-    lift: Real,
-) {
-    for (h, site) in tools.iter().zip(sites) {
-        let body = world.colliders[*h].parent().expect("tool body");
-        world.bodies[body].set_next_kinematic_translation(tool_centre(*site, t, lift));
-    }
-}
-
-/// A world with no gravity stepping at `dt`.
-fn empty_world(dt: Real) -> PhysicsWorld {
-    PhysicsWorld {
-        gravity: Vector::ZERO,
-        integration_parameters: IntegrationParameters {
-            dt,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
-}
-
-/// What a run records.
-struct Tracker {
-    cfg: Config,
-    times: Vec<f64>,
-    max_displacement: Real,
-    finite: bool,
-    /// Hold steps with a finite nonzero force, per tool.
-    hits: Vec<usize>,
-    hold_steps: usize,
-    nonfinite_force: bool,
-    force_y_sum: f64,
-}
-
-impl Tracker {
-    fn new(cfg: Config) -> Self {
-        Self {
-            cfg,
-            times: Vec::with_capacity(cfg.steps),
-            max_displacement: 0.0,
-            finite: true,
-            hits: vec![0; cfg.tools],
-            hold_steps: 0,
-            nonfinite_force: false,
-            force_y_sum: 0.0,
-        }
-    }
-
-    fn displacement(&mut self, d: Real) {
-        if d.is_finite() {
-            self.max_displacement = self.max_displacement.max(d);
-        } else {
-            self.finite = false;
-        }
-    }
-
-    /// The tools' forces at the end of a step ending at time t.
-    fn forces(&mut self, t: Real, forces: &[Vector]) {
-        if forces.iter().any(|f| !f.is_finite()) {
-            self.nonfinite_force = true;
-        }
-        if t < DESCENT - 1e-6 {
-            return;
-        }
-        self.hold_steps += 1;
-        for (hits, f) in self.hits.iter_mut().zip(forces) {
-            if f.is_finite() && f.length() > 0.0 {
-                *hits += 1;
-                self.force_y_sum += f.y as f64;
-            }
-        }
-    }
-
-    fn row(self, engine: &'static str, nodes: usize) -> Row {
-        let tail = &self.times[self.times.len() / 10..];
-        let samples = (self.hold_steps * self.cfg.tools).max(1) as f64;
-        Row {
-            engine,
-            nodes,
-            cfg: self.cfg,
-            ms_per_step: tail.iter().sum::<f64>() / tail.len() as f64 * 1e3,
-            max_displacement: self.max_displacement,
-            stable: self.finite && self.max_displacement < STABLE_BOUND,
-            force_available: !self.nonfinite_force && self.hits.iter().all(|&h| h > 0),
-            force_share: self.hits.iter().sum::<usize>() as f64 / samples,
-            mean_force_y: self.force_y_sum / samples,
-        }
-    }
-}
-
-/// The crate: the surface attached to a fixed body, the tools pressing it, `SurfaceSet::step`.
-fn run_touch(p: &Plate, cfg: Config) -> Row {
-    let mut world = empty_world(cfg.dt);
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 1,
-        collider: true,
-    };
-    let h = set
-        .insert(
-            p.surface(cfg.dt, Integrator::EXACT),
-            ground,
-            &mut world,
-            options,
-        )
-        .expect("attached");
-    let sites = tool_sites(cfg.tools);
-    let tools = insert_tools(&mut world, &sites, 0.0, cfg.friction);
-    for t in &tools {
-        set.add_tool(*t, &mut world).unwrap();
-        let friction = Friction::new(cfg.friction, cfg.friction).expect("valid friction");
-        set.set_tool_friction(*t, friction).unwrap();
-    }
-    let mut track = Tracker::new(cfg);
-    let mut forces = Vec::with_capacity(tools.len());
-    for k in 0..cfg.steps {
-        let t = (k + 1) as Real * cfg.dt;
-        drive_tools(&mut world, &tools, &sites, t, 0.0);
-        let t0 = Instant::now();
-        set.step(&mut world);
-        track.times.push(t0.elapsed().as_secs_f64());
-        let s = &set.get(h).expect("surface").surface;
-        track.displacement(if s.is_finite() {
-            s.max_displacement()
-        } else {
-            Real::NAN
-        });
-        forces.clear();
-        forces.extend(
-            tools
-                .iter()
-                .map(|t| set.tool_reaction(*t).map_or(Vector::ZERO, |r| r.force)),
-        );
-        track.forces(t, &forces);
-    }
-    track.row("touch", p.nodes())
-}
-
-/// rapier: a soft body on the same vertices, triangles and edges, the same tools, `world.step`.
-fn run_rapier(p: &Plate, edges: &[[u32; 2]], cfg: Config) -> Row {
-    let mut world = empty_world(cfg.dt);
-    let (f, zeta) = rapier_softness(p.vertex_mass());
-    let builder = SoftBodyBuilder::new(p.mesh.vertices.clone())
-        .edges(edges.to_vec())
-        .surface(p.mesh.triangles.clone())
-        .pinned_particles(p.rim.iter().copied())
-        .mass(TOTAL_MASS)
-        .material(SoftBodyMaterial {
-            edge_softness: SpringCoefficients::new(f, zeta),
-            ..Default::default()
-        })
-        .particle_radius(SKIN);
-    let handle = world.insert_soft_body(builder);
-    let sites = tool_sites(cfg.tools);
-    let tools = insert_tools(&mut world, &sites, SKIN, cfg.friction);
-    let mut track = Tracker::new(cfg);
-    let mut forces = Vec::with_capacity(tools.len());
-    for k in 0..cfg.steps {
-        let t = (k + 1) as Real * cfg.dt;
-        drive_tools(&mut world, &tools, &sites, t, SKIN);
-        let t0 = Instant::now();
-        world.step();
-        track.times.push(t0.elapsed().as_secs_f64());
-        let d = world.soft_bodies[handle]
-            .particle_positions()
-            .zip(&p.mesh.vertices)
-            .map(|(x, home)| (x - *home).length())
-            .fold(
-                0.0,
-                |a: Real, d| if d.is_finite() { a.max(d) } else { Real::NAN },
-            );
-        track.displacement(d);
-        // The impulses rapier wrote back into each tool's contact pairs over the step, over dt
-        // (a manifold's normal points from collider1 to collider2).
-        forces.clear();
-        forces.extend(tools.iter().map(|tool| {
-            world
-                .contact_pairs_with(*tool)
-                .map(|pair| {
-                    let sign = if pair.collider1 == *tool { -1.0 } else { 1.0 };
-                    pair.total_impulse() * (sign / cfg.dt)
-                })
-                .sum::<Vector>()
-        }));
-        track.forces(t, &forces);
-    }
-    track.row("rapier", p.nodes())
+    pub(crate) mean_force_y: f64,
 }
 
 /// Steps a free crate surface `CHECK_STEPS` times under a 10 mN load on its centre vertex:
