@@ -552,3 +552,32 @@ fn a_jaws_corner_beside_a_held_vertex_stays_out_of_its_triangle() {
     let r = press_at(shape, turn, lowest, &probes, (0.110015064, 0.0));
     check(&r, inside_of(&r), &[], "jaws over (0.11, 0)");
 }
+
+/// Known failure, found by a random seed of the tilted-tools property test (this stop and at
+/// the stop's starting commit alike): the jaws turned 1.37 rad about the vertical, tilted
+/// 0.039 rad about an axis 0.33 rad from x, over (0.150, 0.148). Both jaws press between the
+/// surface's vertices (no vertex held). At rest the second jaw's contacts cycle with a period
+/// of four substeps: its corners on triangles (146, 163, 164), (163, 180, 164) and
+/// (164, 180, 181) and its edge across (180, 164) are found and pressed, then two or three of
+/// them are missing from the next substep's contacts (the surface under them moved beyond the
+/// contact margin), then back, one corner 0.12 mm deep. The tool's force at the end of each
+/// substep reads 10.15, 9.17, 10.04 and 8.84 N in turn; their mean over the step, 9.549 N,
+/// is the pins' reaction to within a millionth, so the surface holds the tool's load but the
+/// rendered force jitters by ±7 % at rest (the test compares the last substep's, 7.5 % off).
+/// Not fixed: the cause (the presses' position projection and the constraint solve's rows that
+/// nearly repeat each other on these five vertices) was not pinned down. Run with
+/// `cargo test --release --test it -- --ignored jaws_whose`.
+#[test]
+#[ignore = "known failure: a jaw's contacts cycle every four substeps at rest (see the doc)"]
+fn jaws_whose_contacts_cycle_at_rest_still_balance_the_pins() {
+    let (yaw, tilt, tilt_axis) = (1.3718774f32, 0.038617287f32, 0.3322033f32);
+    let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
+    let turn = Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw);
+    let (shape, probes) = jaws();
+    let lowest = probes
+        .iter()
+        .map(|c| (turn * *c).y)
+        .fold(f32::MAX, f32::min);
+    let r = press_at(shape, turn, lowest, &probes, (0.14987464, 0.14828624));
+    check(&r, inside_of(&r), &[], "jaws over (0.150, 0.148)");
+}
