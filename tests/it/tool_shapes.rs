@@ -565,7 +565,9 @@ fn a_jaws_corner_beside_a_held_vertex_stays_out_of_its_triangle() {
 /// is the pins' reaction to within a millionth, so the surface holds the tool's load but the
 /// rendered force jitters by ±7 % at rest (the test compares the last substep's, 7.5 % off).
 /// Not fixed: the cause (the presses' position projection and the constraint solve's rows that
-/// nearly repeat each other on these five vertices) was not pinned down. Run with
+/// nearly repeat each other on these five vertices) was not pinned down; keeping the points
+/// pressed in the last substep as contacts a little farther off the tool steadied this pose
+/// and set another cycling (README, known limits). Run with
 /// `cargo test --release --test it -- --ignored jaws_whose`.
 #[test]
 #[ignore = "known failure: a jaw's contacts cycle every four substeps at rest (see the doc)"]
