@@ -542,15 +542,19 @@ fn a_vertex_left_under_a_legs_edge_is_let_go_and_the_forces_balance() {
 /// way its free vertices must go is short.
 #[test]
 fn a_jaws_corner_beside_a_held_vertex_stays_out_of_its_triangle() {
-    let turn = Rotation::from_rotation_y(1.6115602);
+    let r = jaws_pressed(Rotation::from_rotation_y(1.6115602), (0.110015064, 0.0));
+    check(&r, inside_of(&r), &[], "jaws over (0.11, 0)");
+}
+
+/// The jaws turned by `turn`, pressed at `at` (`press_at` asserts after every step that no
+/// bottom corner is under the surface).
+fn jaws_pressed(turn: Rotation, at: (f32, f32)) -> Pressed {
     let (shape, probes) = jaws();
     let lowest = probes
         .iter()
         .map(|c| (turn * *c).y)
         .fold(f32::MAX, f32::min);
-    // `press_at` asserts after every step that no probe is under the surface.
-    let r = press_at(shape, turn, lowest, &probes, (0.110015064, 0.0));
-    check(&r, inside_of(&r), &[], "jaws over (0.11, 0)");
+    press_at(shape, turn, lowest, &probes, at)
 }
 
 /// Known failure, found by a random seed of the tilted-tools property test (this stop and at
@@ -575,11 +579,6 @@ fn jaws_whose_contacts_cycle_at_rest_still_balance_the_pins() {
     let (yaw, tilt, tilt_axis) = (1.3718774f32, 0.038617287f32, 0.3322033f32);
     let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
     let turn = Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw);
-    let (shape, probes) = jaws();
-    let lowest = probes
-        .iter()
-        .map(|c| (turn * *c).y)
-        .fold(f32::MAX, f32::min);
-    let r = press_at(shape, turn, lowest, &probes, (0.14987464, 0.14828624));
+    let r = jaws_pressed(turn, (0.14987464, 0.14828624));
     check(&r, inside_of(&r), &[], "jaws over (0.150, 0.148)");
 }
