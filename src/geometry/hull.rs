@@ -13,7 +13,8 @@ use crate::math::Vector;
 use glamx::DVec3;
 use parry3d::bounding_volume::Aabb;
 // parry's hash map (foldhash, fixed state): deterministic, and the hull of a rounded hull's
-// 540 points took 15-20 % less time than with std's SipHash (3.4-4.8 -> 2.7-3.9 ms, alternated runs).
+// 540 points took 15-20 % less time than with std's SipHash (3.4-4.8 -> 2.7-3.9 ms,
+// alternated runs).
 use parry3d::utils::hashmap::HashMap;
 use robust::{orient3d, Coord3D};
 

@@ -284,7 +284,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // through the step and neither passed through the other. What overlap
                         // is left is rapier's soft contact, left as vanilla rapier leaves it:
                         // pushing one body of a falling pile out of the body under it drove the
-                        // body above 0.9 m into it (rapier's convex-hull stress scene).
+                        // body above 0.9 m into it (rapier's convex-hull stress scene). (A
+                        // dynamic partner within the safe step was already left out above,
+                        // before its points were read; `!may_tunnel` only restates that.)
                         if partner_dynamic && (overlapped || !may_tunnel) {
                             continue;
                         }
