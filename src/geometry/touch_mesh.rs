@@ -461,6 +461,19 @@ impl TouchMesh {
     pub fn triangle_normal(&self, t: u32) -> Vector {
         self.tri_normals[t as usize]
     }
+    /// Which sides of internal triangle `t` (in [`TouchMesh::triangle_edges`]' order) the
+    /// mesh continues across in the same plane: the other triangle on that edge has the same
+    /// normal to within `1e-6` of its cosine (1.4 mrad).
+    pub(crate) fn flat_sides(&self, t: u32) -> [bool; 3] {
+        self.triangle_edges(t).map(|e| {
+            self.edge_triangles(e).iter().any(|&o| {
+                o != t
+                    && o != u32::MAX
+                    && self.tri_normals[o as usize].dot(self.tri_normals[t as usize])
+                        >= 1.0 - 1.0e-6
+            })
+        })
+    }
     /// The triangles (internal numbering) that have vertex `v`.
     pub fn vertex_triangles(&self, v: u32) -> &[u32] {
         let (a, b) = (

@@ -278,7 +278,11 @@ impl Reconstructor {
             let a = fixed_tri(fixed, tf);
             let b = moving.indices()[tm as usize]
                 .map(|v| moving_pt(&mut self.ws, moving, fr, v) + shift);
-            if triangles_cross(&a, &b, fr.tol) {
+            if triangles_cross(
+                (&a, fixed.flat_sides(tf)),
+                (&b, moving.flat_sides(tm)),
+                fr.tol,
+            ) {
                 return true;
             }
         }
