@@ -91,6 +91,25 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let turn = prev_pose.rotation.angle_between(pose_now.rotation)
                         * collider_reach(&self.hooks.meshes, ch, co);
                     let fast = d.length() + turn >= mesh.min_extent().min(prediction);
+                    // A dynamic partner that moved less than the pair's safe step relative to
+                    // this body is left to rapier's solver (below) whatever its contact points
+                    // say, decided before they are read (rapier's points of every pair in a
+                    // pile were most of the guard's time); so is one with no touch mesh.
+                    let left_to_rapier =
+                        |ph: ColliderHandle, partner: &rapier3d::geometry::Collider| {
+                            partner
+                                .parent()
+                                .and_then(|pb| world.bodies.get(pb))
+                                .is_some_and(|b| b.is_dynamic())
+                                && self.hooks.meshes.get(&ph).is_none_or(|pm| {
+                                    let dp = body_motion(
+                                        &self.hooks.prev_poses,
+                                        &world.bodies,
+                                        partner.parent(),
+                                    );
+                                    (d - dp).length() < safe_step(&mesh, &pm.mesh)
+                                })
+                        };
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
                     let read =
@@ -181,25 +200,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 {
                                     continue;
                                 }
-                                // A dynamic partner that moved less than the pair's safe step
-                                // relative to this body is left to rapier's solver below
-                                // whatever its contact points say: not read (rapier's points of
-                                // every pair in a pile were most of the guard's time).
-                                let partner_body =
-                                    partner.parent().and_then(|pb| world.bodies.get(pb));
-                                if partner_body.is_some_and(|b| b.is_dynamic()) {
-                                    let Some(pm) = self.hooks.meshes.get(&ph) else {
-                                        continue;
-                                    };
-                                    let safe = safe_step(&mesh, &pm.mesh);
-                                    let dp = body_motion(
-                                        &self.hooks.prev_poses,
-                                        &world.bodies,
-                                        partner.parent(),
-                                    );
-                                    if (d - dp).length() < safe {
-                                        continue;
-                                    }
+                                if left_to_rapier(ph, partner) {
+                                    continue;
                                 }
                                 let view = read(ph, partner, Some(p));
                                 if !view.calm(&self.options) {
@@ -215,26 +217,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         if ph == ch || partner.parent() == Some(bh) {
                             continue;
                         }
-                        // A dynamic partner that moved less than the pair's safe step relative
-                        // to this body is left to rapier's solver (below), decided before its
-                        // contact points are read: most of a pile's swept partners are such
-                        // neighbours.
-                        if partner
-                            .parent()
-                            .and_then(|pb| world.bodies.get(pb))
-                            .is_some_and(|b| b.is_dynamic())
-                        {
-                            let Some(pm) = self.hooks.meshes.get(&ph) else {
-                                continue;
-                            };
-                            let dp = body_motion(
-                                &self.hooks.prev_poses,
-                                &world.bodies,
-                                partner.parent(),
-                            );
-                            if (d - dp).length() < safe_step(&mesh, &pm.mesh) {
-                                continue;
-                            }
+                        // (Most of a pile's swept partners; a slow body's were left out above.)
+                        if view.is_none() && left_to_rapier(ph, partner) {
+                            continue;
                         }
                         // Only pairs rapier itself would solve (sensors, groups, disabled
                         // colliders, collision types and the user's pair filter are rapier's
@@ -286,7 +271,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // pushing one body of a falling pile out of the body under it drove the
                         // body above 0.9 m into it (rapier's convex-hull stress scene). (A
                         // dynamic partner within the safe step was already left out above,
-                        // before its points were read; `!may_tunnel` only restates that.)
+                        // before its points were read: `left_to_rapier`; `!may_tunnel` only
+                        // restates that.)
                         if partner_dynamic && (overlapped || !may_tunnel) {
                             continue;
                         }
