@@ -161,13 +161,16 @@ pub(super) fn press_all(
         .iter()
         .zip(velocities)
         .zip(owners)
-        .map(|((c, &v), owner)| PointPress {
-            vertices: c.weights(),
-            normal: c.normal,
-            depth: above_rounding(surface, c),
-            normal_velocity: v.dot(c.normal),
-            tangential: friction_of(v, owner),
-            holder: owner.holder.map(|k| (k, c.point)),
+        .map(|((c, &v), owner)| {
+            let (depth, normal_velocity) = past_rounding(surface, c, v, owner.holder.is_none());
+            PointPress {
+                vertices: c.weights(),
+                normal: c.normal,
+                depth,
+                normal_velocity,
+                tangential: friction_of(v, owner),
+                holder: owner.holder.map(|k| (k, c.point)),
+            }
         })
         .collect();
     // The geometry layer's contacts are finite, with unit normals and weights on existing
@@ -213,24 +216,41 @@ pub(super) fn press_all(
     ids
 }
 
-/// A contact's depth, or 0 within four `f32` steps of the coordinates of its vertices, where
-/// its sign is rounding. A flipping sign pressed the point in by that much, or left it a gap of
-/// that size for the step to close, each with a velocity change to match: at rest the force
-/// swung from substep to substep (a jaw 8.84-10.15 N for 9.55 N, cycling through four contact
-/// sets; a needle on a plate of 1 kg vertices, its depth ±6e-8 m on 0.3 m coordinates,
-/// 0.42-0.58 N for 0.50 N, now half that). A vertex out of range (a bug upstream, which
-/// [`press_all`] reports) counts for nothing here.
-fn above_rounding(surface: &MassSpringSurface, c: &SurfaceContact) -> Real {
+/// A contact's depth and the normal velocity of the tool's material point there (`v`), each 0
+/// within four `f32` steps of the coordinates of the contact's vertices (the velocity over the
+/// surface's substep, only where the depth is 0 too, and only for a `kinematic` tool, whose
+/// velocity is its poses' difference), where their signs are rounding. (A dynamic tool's
+/// velocity is its body's, which the surface's solve meets with the body's mass.)
+///
+/// A flipping depth pressed the point in by that much, or left it a gap of that size for the
+/// step to close, each with a velocity change to match: at rest the force swung from substep
+/// to substep (a jaw 8.84-10.15 N for 9.55 N, cycling through four contact sets; a needle on a
+/// plate of 1 kg vertices, its depth ±6e-8 m on 0.3 m coordinates, 0.42-0.58 N for 0.50 N, now
+/// half that). A tool held still reads a normal velocity of a few `f32` steps per substep
+/// (its pose's round trip through the tool's frame): pressed with it, the point crept away
+/// from the tool, and once its gap passed the depth's cut one substep closed it (a cube corner
+/// at rest, 0.466 N and then 0.535 N for 0.503 N). A vertex out of range (a bug upstream,
+/// which [`press_all`] reports) counts for nothing here.
+fn past_rounding(
+    surface: &MassSpringSurface,
+    c: &SurfaceContact,
+    v: Vector,
+    kinematic: bool,
+) -> (Real, Real) {
     let reach = c
         .weights()
         .iter()
         .filter(|(v, _)| (*v as usize) < surface.num_vertices())
         .map(|(v, _)| surface.position(*v).abs().max_element())
         .fold(0.0, Real::max);
-    if c.depth.abs() <= 4.0 * Real::EPSILON * reach {
-        0.0
+    let cut = 4.0 * Real::EPSILON * reach;
+    let normal_velocity = v.dot(c.normal);
+    if c.depth.abs() > cut {
+        (c.depth, normal_velocity)
+    } else if !kinematic || (normal_velocity * surface.dt()).abs() > cut {
+        (0.0, normal_velocity)
     } else {
-        c.depth
+        (0.0, 0.0)
     }
 }
 
