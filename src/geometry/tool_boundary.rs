@@ -340,18 +340,15 @@ pub(crate) fn boundary_point(
 ) -> (Vector, bool) {
     let local = pose.inverse_transform_point(p);
     if let Some(poly) = shape.as_convex_polyhedron() {
-        if let Some((q, _)) = face_projection(poly, local) {
-            return (pose.transform_point(q), true);
-        }
-        // Outside by a hair (within the contact margin, or GJK's absolute tolerance on a
-        // small tool), parry takes the point for inside and its projection can land far away:
-        // a vertex 3.5e-7 m outside a 7.5 mm hull's bottom edge was put 2 mm across the bottom
-        // face, and the plate, dragged, blew up (a random case of `grazing_drag`). There the
-        // nearest face plane's projection is within that hair of the true nearest point.
+        // Inside, the nearest face plane's projection. Outside by a hair too (within the
+        // contact margin, or GJK's absolute tolerance on a small tool): parry takes such a
+        // point for inside and its projection can land far away (a vertex 3.5e-7 m outside a
+        // 7.5 mm hull's bottom edge was put 2 mm across the bottom face, and the plate,
+        // dragged, blew up: a random case of `grazing_drag`); the plane's projection is within
+        // that hair of the true nearest point.
         if let Some((n, d)) = closest_face(poly, local) {
-            let size = poly.local_aabb().extents().max_element();
-            if d <= (1e-4 * size).max(2.5e-6) {
-                return (pose.transform_point(local - n * d), false);
+            if d <= 0.0 || d <= (1e-4 * poly.local_aabb().extents().max_element()).max(2.5e-6) {
+                return (pose.transform_point(local - n * d), d <= 0.0);
             }
         }
         return (shape.project_point(pose, p, false).point, false);
