@@ -6,7 +6,7 @@
 //! light and heavy, with convex and triangle-mesh tools, anywhere inside a triangle.
 
 use crate::common::strategies::rotation;
-use crate::common::{edge_laplacian, point_compliance};
+use crate::common::{edge_laplacian, point_compliance, steady};
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -215,13 +215,6 @@ fn check(name: &str, (force, reaction): (Vector, ToolReaction), expected: f64) {
     );
     assert!(reaction.pressed_points > 0);
     assert!(steady(&reaction), "{name}: not at rest: {reaction:?}");
-}
-
-/// At rest the force at the step's last substep is its mean over the step within 1 %: a tool
-/// held still gets the same force at every substep. (Rounding once made it swing: a needle
-/// 0.46-0.54 N for 0.50 N, a cube corner 0.466 and 0.535 N for 0.503 N.)
-fn steady(r: &ToolReaction) -> bool {
-    (r.force - r.mean_force).length() <= 0.01 * r.mean_force.length()
 }
 
 const SETTINGS: [(u32, f32, Integrator); 3] = [
