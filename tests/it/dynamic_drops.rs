@@ -112,8 +112,15 @@ fn drop(body: Body, mass: f32, height: f32, k: f32, substeps: u32) -> Drop {
         support: 0.0,
     };
     let (mut touched, mut touching) = (false, false);
+    // The fastest fall before the first touch: a body that touches and leaves within one
+    // step (the contact gone by the step's last substep) is first seen touching on a later
+    // step, rising.
+    let mut fastest_fall: f32 = 0.0;
     for s in 0..steps {
         let before = world.bodies[body].linvel().y;
+        if !touched {
+            fastest_fall = fastest_fall.max(-before);
+        }
         set.step(&mut world);
         let reaction = set.tool_reaction(ball).unwrap();
         let now = reaction.held_vertices + reaction.pressed_points > 0;
@@ -123,8 +130,10 @@ fn drop(body: Body, mass: f32, height: f32, k: f32, substeps: u32) -> Drop {
             run.impact = if s == 0 {
                 (2.0 * world.gravity.length() * height).sqrt()
             } else {
-                -before
+                fastest_fall
             };
+            // Rising already: it bounced within the step before.
+            run.rebound = run.rebound.max(before);
             touched = true;
         }
         if touching && !now {
