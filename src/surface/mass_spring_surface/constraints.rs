@@ -402,6 +402,7 @@ pub(super) fn constrain(
                 &reference,
                 tol,
                 &mut factor,
+                true,
             );
             if let Some((_, prev)) = last.take() {
                 give_back(&mut memory.scratch.system, prev);
