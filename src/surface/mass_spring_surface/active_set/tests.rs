@@ -190,8 +190,8 @@ fn a_row_of_nan_is_left_out_and_the_rest_kept() {
 /// Five points of one triangle (three unit masses, one normal) pressed at once, as a flat
 /// face on a coarse surface presses it: their rows have rank three, so two repeat the rows
 /// taken first. One of them wants more than the plane the first three give it (0.65 against
-/// 0.55): the factor alone leaves it violated, and the relaxation meets every row, pushing
-/// only, each push on a row that is met exactly.
+/// 0.55): the factor alone leaves it 0.1 short, and the relaxation meets every row, pushing
+/// only, each push on a row that is met (within 1e-6).
 #[test]
 fn a_repeated_row_the_rows_kept_leave_violated_is_still_met() {
     let w = [
