@@ -15,7 +15,7 @@ use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
 use super::tool_shape::{contact_margin, ToolShape};
 use super::vertex_holds::hold_vertices;
 use crate::geometry::tool_boundary::distance_outside;
-use crate::geometry::SurfaceContact;
+use crate::geometry::{SurfaceContact, TrianglesRound};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -101,7 +101,12 @@ impl ToolMotion {
         &self,
         inv: &Pose,
         h: Real,
-        (triangles, candidates, kept): (&[[u32; 3]], &[u32], &mut Vec<u32>),
+        (triangles, candidates, kept, rings): (
+            &[[u32; 3]],
+            &[u32],
+            &mut Vec<u32>,
+            TrianglesRound<'_>,
+        ),
         (before, now): (&[Vector], &[Vector]),
         contacts: &mut Vec<SurfaceContact>,
         velocities: &mut Vec<Vector>,
@@ -111,7 +116,7 @@ impl ToolMotion {
             let first = contacts.len();
             find_contacts(
                 triangles,
-                (candidates, kept),
+                (candidates, kept, rings),
                 mesh,
                 &(*inv * self.start * *local),
                 &(*inv * self.end * *local),
@@ -294,6 +299,7 @@ pub(super) fn surface_substep(
                     s.surface.triangles(),
                     s.search.triangles_of_tool(k),
                     &mut kept,
+                    &|v, out| s.search.triangles_round(v, out),
                 ),
                 (&s.before, &s.scratch),
                 &mut s.contacts,

@@ -12,7 +12,10 @@
 
 use super::friction::Friction;
 use super::tool_shape::contact_margin;
-use crate::geometry::{tool_surface_contacts, Feature, SurfaceContact, SurfaceSnapshot, TouchMesh};
+use crate::geometry::{
+    tool_surface_contacts_with_rings, Feature, SurfaceContact, SurfaceSnapshot, TouchMesh,
+    TrianglesRound,
+};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, PointPress, Tangential};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
@@ -107,7 +110,7 @@ fn part_sweep(mesh: &TouchMesh, start: &Pose, end: &Pose) -> (Aabb, Real) {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn find_contacts(
     triangles: &[[u32; 3]],
-    (candidates, kept): (&[u32], &mut Vec<u32>),
+    (candidates, kept, rings): (&[u32], &mut Vec<u32>, TrianglesRound<'_>),
     mesh: &TouchMesh,
     start: &Pose,
     end: &Pose,
@@ -135,7 +138,9 @@ pub(super) fn find_contacts(
         return;
     }
     let first = contacts.len();
-    tool_surface_contacts(&snapshot, candidates, mesh, start, end, margin, contacts);
+    tool_surface_contacts_with_rings(
+        &snapshot, candidates, rings, mesh, start, end, margin, contacts,
+    );
     for c in &contacts[first..] {
         // The tool's material point under the contact: its velocity.
         let material = end.inverse_transform_point(c.point);

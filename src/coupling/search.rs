@@ -120,6 +120,13 @@ impl ContactSearch {
         }
     }
 
+    /// Appends to `out` the triangles round `vertex` (nothing before the tree is built).
+    pub fn triangles_round(&self, vertex: u32, out: &mut Vec<u32>) {
+        if let Some(bvh) = &self.bvh {
+            bvh.triangles_of(&[vertex], out);
+        }
+    }
+
     /// Tool `k`'s candidate triangles.
     pub fn triangles_of_tool(&self, k: usize) -> &[u32] {
         self.tools.get(k).map_or(&[], Vec::as_slice)

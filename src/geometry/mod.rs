@@ -28,5 +28,8 @@ pub use contact::{
 pub use motion::RigidMotion;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
 pub use surface_bvh::{NearCache, SurfaceBvh};
-pub use surface_contact::{tool_surface_contacts, triangles_in, SurfaceContact, SurfaceSnapshot};
+pub use surface_contact::{
+    tool_surface_contacts, tool_surface_contacts_with_rings, triangles_in, SurfaceContact,
+    SurfaceSnapshot, TrianglesRound,
+};
 pub use touch_mesh::{safe_step_length, Feature, TouchMesh, TouchMeshError};

@@ -133,6 +133,11 @@ pub fn triangles_in(bounds: &[Aabb], aabb: &Aabb, out: &mut Vec<u32>) {
     }
 }
 
+/// The triangle a tool vertex is most inside: how far inside (its least barycentric
+/// coordinate), its vertices, the vertex's weights on them, its normal toward the tool, and the
+/// vertex's height over it.
+type Inside = (f64, [u32; 3], [f64; 3], DVec3, f64);
+
 /// Smallest cosine between an edge-edge contact normal and the surface triangle's normal (a
 /// tool edge standing nearly straight into the surface is pressed by its lowest vertex).
 const MIN_EDGE_NORMAL_COS: f64 = 0.2;
@@ -180,6 +185,81 @@ const MIN_EDGE_SINE: f64 = 0.1;
 pub fn tool_surface_contacts(
     surface: &SurfaceSnapshot<'_>,
     candidates: &[u32],
+    tool: &TouchMesh,
+    start: &Pose,
+    end: &Pose,
+    margin: Real,
+    out: &mut Vec<SurfaceContact>,
+) {
+    contacts_with_rings(surface, candidates, None, tool, start, end, margin, out);
+}
+
+/// The triangles round a surface vertex: appends to its second argument every triangle that
+/// uses the vertex (as [`super::SurfaceBvh::triangles_of`] lists them).
+pub type TrianglesRound<'a> = &'a dyn Fn(u32, &mut Vec<u32>);
+
+/// [`tool_surface_contacts`], with the surface's smooth normal near a triangle's edge summed
+/// over every triangle round each vertex (`rings`) rather than over the candidates that use
+/// it. The candidates change with the tool's box as the surface moves, and a normal summed
+/// over them with it: jaws tilted 0.30 rad, their corner on a triangle's edge, read a normal
+/// 5° off at every other substep and slid the plate sideways and back at rest.
+///
+/// # Example
+/// A cube corner 1 cm into a flat square of two triangles, the rings from a scan:
+/// ```
+/// use rapier_touch::prelude::*;
+/// use rapier_touch::geometry::{tool_surface_contacts_with_rings, Feature, SurfaceSnapshot};
+///
+/// let square = [
+///     Vector::new(-1.0, 0.0, -1.0), Vector::new(1.0, 0.0, -1.0),
+///     Vector::new(1.0, 0.0, 1.0), Vector::new(-1.0, 0.0, 1.0),
+/// ];
+/// let triangles = [[0, 2, 1], [0, 3, 2]];
+/// let rings = |v: u32, out: &mut Vec<u32>| {
+///     out.extend((0..2u32).filter(|&t| triangles[t as usize].contains(&v)));
+/// };
+/// let surface = SurfaceSnapshot { before: &square, now: &square, triangles: &triangles };
+/// let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.1))).unwrap();
+/// let tilt = Rotation::from_rotation_arc(Vector::ONE.normalize(), Vector::Y);
+/// let corner = 0.1 * 3f32.sqrt();
+/// // Over the diagonal the two triangles share: the smooth normal there is theirs, -y.
+/// let start = Pose::from_parts(Vector::new(0.2, corner + 0.01, 0.2), tilt);
+/// let end = Pose::from_parts(Vector::new(0.2, corner - 0.01, 0.2), tilt);
+/// let mut out = Vec::new();
+/// tool_surface_contacts_with_rings(&surface, &[0, 1], &rings, &cube, &start, &end, 1e-6, &mut out);
+/// // The corner's own contact (the cube's edges through it cross the diagonal too).
+/// let c = out.iter().find(|c| matches!(c.tool_feature, Feature::Vertex(_))).unwrap();
+/// assert!((c.depth - 0.01).abs() < 1e-5);
+/// assert!((c.normal - Vector::new(0.0, -1.0, 0.0)).length() < 1e-5);
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub fn tool_surface_contacts_with_rings(
+    surface: &SurfaceSnapshot<'_>,
+    candidates: &[u32],
+    rings: TrianglesRound<'_>,
+    tool: &TouchMesh,
+    start: &Pose,
+    end: &Pose,
+    margin: Real,
+    out: &mut Vec<SurfaceContact>,
+) {
+    contacts_with_rings(
+        surface,
+        candidates,
+        Some(rings),
+        tool,
+        start,
+        end,
+        margin,
+        out,
+    );
+}
+
+#[allow(clippy::too_many_arguments)]
+fn contacts_with_rings(
+    surface: &SurfaceSnapshot<'_>,
+    candidates: &[u32],
+    rings: Option<TrianglesRound<'_>>,
     tool: &TouchMesh,
     start: &Pose,
     end: &Pose,
@@ -246,7 +326,30 @@ pub fn tool_surface_contacts(
     }
     // The area-weighted normal of the candidate region at vertex `v`, toward the tool (asked
     // for a few vertices per call: summed where asked rather than kept for every vertex).
+    // With `rings`, over every triangle round the vertex, each turned toward the tool as the
+    // candidates are.
     let vertex_normal = |v: u32| -> DVec3 {
+        if let Some(rings) = rings {
+            let mut ring = Vec::new();
+            rings(v, &mut ring);
+            let sum = ring
+                .iter()
+                .filter_map(|&t| {
+                    let (now, before) = (
+                        surface.tri(surface.now, t)?,
+                        surface.tri(surface.before, t)?,
+                    );
+                    let area = (now[1] - now[0]).cross(now[2] - now[0]);
+                    let area_before = (before[1] - before[0]).cross(before[2] - before[0]);
+                    let toward = (centre - before[0]).dot(area_before) >= 0.0;
+                    Some(if toward { area } else { -area })
+                })
+                .filter(|a| a.is_finite())
+                .sum::<DVec3>();
+            if !ring.is_empty() {
+                return sum;
+            }
+        }
         tris.iter()
             .filter(|t| t.0.contains(&v))
             .map(|t| t.4)
@@ -267,7 +370,7 @@ pub fn tool_surface_contacts(
     // Tool vertex inside a surface triangle.
     for (v, (&p1, &p0)) in tool_end.iter().zip(&tool_start).enumerate() {
         let feature = Feature::Vertex(v as u32);
-        let mut best: Option<(f64, SurfaceContact)> = None;
+        let mut best: Option<Inside> = None;
         let travel = (p1 - p0).length() + margin;
         // Farther from all the triangles' bounds than any of the tests below reaches: none.
         let reach_all =
@@ -292,39 +395,37 @@ pub fn tool_surface_contacts(
                 continue;
             };
             let inside = bary[0].min(bary[1]).min(bary[2]);
-            if best.as_ref().is_some_and(|(b, _)| *b >= inside) {
+            if best.as_ref().is_some_and(|b| b.0 >= inside) {
                 continue;
             }
-            let idx = *idx;
             let w = bary.map(|b| b.clamp(0.0, 1.0));
             let sum = w[0] + w[1] + w[2];
             if sum <= 0.0 {
                 continue;
             }
-            let w = w.map(|x| x / sum);
-            // Pushed along the triangle's normal well inside it; near its edges, blended into
-            // the smooth normal, by what puts the vertex on the triangle's plane.
+            best = Some((inside, *idx, w.map(|x| x / sum), *n, h1));
+        }
+        // Pushed along the triangle's normal well inside it; near its edges, blended into the
+        // smooth normal, by what puts the vertex on the triangle's plane (the smooth normal
+        // for the chosen triangle only).
+        out.extend(best.map(|(inside, idx, w, n, h1)| {
             let blend = (inside / SMOOTH_NEAR_EDGE).clamp(0.0, 1.0);
             let m = if blend < 1.0 {
-                (*n * blend + smooth(&idx, &w, *n) * (1.0 - blend))
+                (n * blend + smooth(&idx, &w, n) * (1.0 - blend))
                     .try_normalize()
-                    .unwrap_or(*n)
+                    .unwrap_or(n)
             } else {
-                *n
+                n
             };
-            best = Some((
-                inside,
-                SurfaceContact {
-                    tool_feature: feature,
-                    surface: [0, 1, 2].map(|k| (idx[k], w[k] as Real)),
-                    count: 3,
-                    normal: (-m).as_vec3(),
-                    depth: (-h1 / m.dot(*n)) as Real,
-                    point: p1.as_vec3(),
-                },
-            ));
-        }
-        out.extend(best.map(|(_, c)| c));
+            SurfaceContact {
+                tool_feature: feature,
+                surface: [0, 1, 2].map(|k| (idx[k], w[k] as Real)),
+                count: 3,
+                normal: (-m).as_vec3(),
+                depth: (-h1 / m.dot(n)) as Real,
+                point: p1.as_vec3(),
+            }
+        }));
     }
     // Tool edge across a surface edge. Each surface edge once, with the first candidate
     // triangle that has it (its normal and motion).
