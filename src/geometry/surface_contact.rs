@@ -138,6 +138,21 @@ pub fn triangles_in(bounds: &[Aabb], aabb: &Aabb, out: &mut Vec<u32>) {
 /// vertex's height over it.
 type Inside = (f64, [u32; 3], [f64; 3], DVec3, f64);
 
+/// A surface triangle's area normal now (vertices `now`), turned toward the side of `centre`
+/// the triangle had at the start of the substep (`before`), and the reciprocal of its length;
+/// `None` for a triangle with zero or non-finite area now or before (no side to turn to). The
+/// two cross products once each: the side only needs the sign along the normal before.
+fn area_toward(centre: DVec3, now: &[DVec3; 3], before: &[DVec3; 3]) -> Option<(DVec3, f64)> {
+    let area = (now[1] - now[0]).cross(now[2] - now[0]);
+    let area_before = (before[1] - before[0]).cross(before[2] - before[0]);
+    let (rcp, rcp_before) = (area.length_recip(), area_before.length_recip());
+    if !(rcp.is_finite() && rcp > 0.0 && rcp_before.is_finite() && rcp_before > 0.0) {
+        return None;
+    }
+    let toward = (centre - before[0]).dot(area_before) >= 0.0;
+    Some((if toward { area } else { -area }, rcp))
+}
+
 /// Smallest cosine between an edge-edge contact normal and the surface triangle's normal (a
 /// tool edge standing nearly straight into the surface is pressed by its lowest vertex).
 const MIN_EDGE_NORMAL_COS: f64 = 0.2;
@@ -293,20 +308,8 @@ fn contacts_with_rings(
         ) else {
             continue;
         };
-        // The two cross products once each: the unit normal now is the area normal over its
-        // length, and the side of the tool's centre only needs the sign along the one before
-        // (a triangle with zero or non-finite area now or before is skipped).
-        let area = (now[1] - now[0]).cross(now[2] - now[0]);
-        let area_before = (before[1] - before[0]).cross(before[2] - before[0]);
-        let (rcp, rcp_before) = (area.length_recip(), area_before.length_recip());
-        if !(rcp.is_finite() && rcp > 0.0 && rcp_before.is_finite() && rcp_before > 0.0) {
+        let Some((area, rcp)) = area_toward(centre, &now, &before) else {
             continue;
-        }
-        let n = area * rcp;
-        let sign = if (centre - before[0]).dot(area_before) >= 0.0 {
-            1.0
-        } else {
-            -1.0
         };
         // The largest of the three displacements (one square root).
         let moved = (0..3)
@@ -319,7 +322,7 @@ fn contacts_with_rings(
         );
         all_tris = (all_tris.0.min(bounds.0), all_tris.1.max(bounds.1));
         max_moved = max_moved.max(moved);
-        tris.push((idx, now, n * sign, moved, area * sign, bounds));
+        tris.push((idx, now, area * rcp, moved, area, bounds));
     }
     if tris.is_empty() {
         return;
@@ -339,12 +342,8 @@ fn contacts_with_rings(
                         surface.tri(surface.now, t)?,
                         surface.tri(surface.before, t)?,
                     );
-                    let area = (now[1] - now[0]).cross(now[2] - now[0]);
-                    let area_before = (before[1] - before[0]).cross(before[2] - before[0]);
-                    let toward = (centre - before[0]).dot(area_before) >= 0.0;
-                    Some(if toward { area } else { -area })
+                    area_toward(centre, &now, &before).map(|(area, _)| area)
                 })
-                .filter(|a| a.is_finite())
                 .sum::<DVec3>();
             if !ring.is_empty() {
                 return sum;
