@@ -28,11 +28,11 @@
 ///
 /// `factor` is the storage of the Cholesky factor, kept by the caller from one solve to the
 /// next. `relax`: rows left out as repeats that the answer leaves violated are met by
-/// relaxing them and the rows coupled to them ([`relax_repeats`]). Never with a `reference`
-/// (a rigid holder's rows): there the sweeps, slow on the holder's rank-six term, still left
-/// residuals of 1e-6 to 1e-4 after 50 of them, and a heavy U at rest on a soft plate at one
-/// substep was kicked about at 1.1-1.5 cm/s by their changing answers (under 1 cm/s
-/// without).
+/// relaxing them and the rows coupled to them ([`relax_repeats`]). The callers leave it off
+/// where a rigid holder's rows are in the system: there the sweeps, slow on the holder's
+/// rank-six term, still left residuals of 1e-6 to 1e-4 after 50 of them, and a heavy U at
+/// rest on a soft plate at one substep was kicked about at 1.1-1.5 cm/s by their changing
+/// answers (under 1 cm/s without).
 pub(super) fn solve_pushing(
     a: &nalgebra::DMatrix<f64>,
     b: &nalgebra::DVector<f64>,
@@ -179,7 +179,7 @@ fn solve_on(
         // What the last pass changed is solved for.
         solve_into(chol, &mut x)?;
     }
-    if relax && chol.reference.is_empty() {
+    if relax {
         relax_repeats(a, b, &push_only, &redundant, tol, &mut x, &mut active);
     }
     Some((x, active))

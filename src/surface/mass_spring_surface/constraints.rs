@@ -402,7 +402,8 @@ pub(super) fn constrain(
                 &reference,
                 tol,
                 &mut factor,
-                true,
+                // Repeated rows relaxed, except with a rigid holder's rows (`solve_pushing`).
+                !any_holder,
             );
             if let Some((_, prev)) = last.take() {
                 give_back(&mut memory.scratch.system, prev);
