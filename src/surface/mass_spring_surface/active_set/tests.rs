@@ -231,3 +231,34 @@ fn a_repeated_row_the_rows_kept_leave_violated_is_still_met() {
         );
     }
 }
+
+/// The relaxation beside bad input: the five rows of the triangle above (one repeated row
+/// violated, so it runs) plus a row whose diagonal is NaN, which the factor leaves out. The
+/// answer stays finite, the NaN row pushes nothing, and the five rows are met.
+#[test]
+fn the_relaxation_beside_a_nan_row_hands_back_no_nan() {
+    let w = [
+        [0.6, 0.2, 0.2],
+        [0.2, 0.6, 0.2],
+        [0.2, 0.2, 0.6],
+        [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+        [0.05, 0.05, 0.9],
+    ];
+    let m = w.len() + 1;
+    let a = nalgebra::DMatrix::from_fn(m, m, |i, j| match (i, j) {
+        (5, 5) => f64::NAN,
+        (5, _) | (_, 5) => 0.0,
+        _ => (0..3).map(|k| w[i][k] * w[j][k]).sum(),
+    });
+    let b = nalgebra::DVector::from_fn(m, |i, _| [0.9, 0.9, 0.7, 2.5 / 3.0, 0.65, 1.0][i]);
+    let mut factor = Vec::new();
+    let (x, active) = solve_pushing(&a, &b, (|_| true, |_| true), &[], 1e-12, &mut factor, true)
+        .expect("a finite solution");
+    assert!(x.iter().all(|v| v.is_finite()), "{x}");
+    assert_eq!(x[5], 0.0);
+    assert!(!active[5]);
+    for i in 0..5 {
+        let ax: f64 = (0..5).map(|j| a[(i, j)] * x[j]).sum();
+        assert!(b[i] - ax <= 1e-6, "row {i} short by {}", b[i] - ax);
+    }
+}
