@@ -187,6 +187,15 @@ fn a_row_of_nan_is_left_out_and_the_rest_kept() {
     }
 }
 
+/// The weights of five points of one triangle on its three vertices (rank three).
+const FIVE_POINTS: [[f64; 3]; 5] = [
+    [0.6, 0.2, 0.2],
+    [0.2, 0.6, 0.2],
+    [0.2, 0.2, 0.6],
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+    [0.05, 0.05, 0.9],
+];
+
 /// Five points of one triangle (three unit masses, one normal) pressed at once, as a flat
 /// face on a coarse surface presses it: their rows have rank three, so two repeat the rows
 /// taken first. One of them wants more than the plane the first three give it (0.65 against
@@ -194,13 +203,7 @@ fn a_row_of_nan_is_left_out_and_the_rest_kept() {
 /// only, each push on a row that is met (within 1e-6).
 #[test]
 fn a_repeated_row_the_rows_kept_leave_violated_is_still_met() {
-    let w = [
-        [0.6, 0.2, 0.2],
-        [0.2, 0.6, 0.2],
-        [0.2, 0.2, 0.6],
-        [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
-        [0.05, 0.05, 0.9],
-    ];
+    let w = FIVE_POINTS;
     let plane = [1.0, 1.0, 0.5];
     let m = w.len();
     let a = nalgebra::DMatrix::from_fn(m, m, |i, j| (0..3).map(|k| w[i][k] * w[j][k]).sum());
@@ -237,13 +240,7 @@ fn a_repeated_row_the_rows_kept_leave_violated_is_still_met() {
 /// answer stays finite, the NaN row pushes nothing, and the five rows are met.
 #[test]
 fn the_relaxation_beside_a_nan_row_hands_back_no_nan() {
-    let w = [
-        [0.6, 0.2, 0.2],
-        [0.2, 0.6, 0.2],
-        [0.2, 0.2, 0.6],
-        [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
-        [0.05, 0.05, 0.9],
-    ];
+    let w = FIVE_POINTS;
     let m = w.len() + 1;
     let a = nalgebra::DMatrix::from_fn(m, m, |i, j| match (i, j) {
         (5, 5) => f64::NAN,
