@@ -7,6 +7,7 @@ mod compare_scenes;
 mod coupling;
 mod curved_reconstruction;
 mod dynamic_drops;
+mod dynamic_impacts;
 mod dynamic_scales;
 mod dynamic_slopes;
 mod every_scale;

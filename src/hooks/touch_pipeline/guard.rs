@@ -3,7 +3,12 @@
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
 use super::correction::{apply_correction, undone_almost_whole};
-use super::pair_view::{parry_depth, push_out, safe_step, within_along, PairState, PairView};
+use super::impacts::{
+    apply_rewind, fresh_impact_rewind, measure_apart, rewind_from, stayed_apart, FreshImpact,
+};
+use super::pair_view::{
+    parry_depth, push_out, safe_step, within_along, PairState, PairStates, PairView,
+};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
     collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop,
@@ -24,8 +29,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     ///
     /// Work is bounded three ways. A body slower than its safe step length cannot have tunneled,
     /// so only the partners rapier's narrow phase already pairs it with are looked at (a swept
-    /// box query otherwise). A pair whose last measured overlap plus the distance both bodies
-    /// travelled since (their odometers) stays under the slop is skipped. Other pairs get
+    /// box query otherwise). A pair whose last measured overlap plus how far the mover moved
+    /// relative to its partner since ([`PairState`]) stays under the slop is skipped. Other
+    /// pairs get
     /// parry's contact query, and a reconstruction only when it finds them deeper than the slop
     /// (or when parry has no query for the shapes, such as TriMesh against TriMesh).
     pub(super) fn guard(&mut self, world: &mut PhysicsWorld) {
@@ -36,7 +42,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         };
         let slop = self.options.penetration_slop;
         let prediction = world.integration_parameters.prediction_distance();
-        self.advance_odometers(world);
+        self.prune_pair_states(world);
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::default();
         let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
         let mut moved_before = 0;
@@ -95,20 +101,53 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     // this body is left to rapier's solver (below) whatever its contact points
                     // say, decided before they are read (rapier's points of every pair in a
                     // pile were most of the guard's time); so is one with no touch mesh.
+                    // Except a fresh impact (`TouchOptions::rewind_dynamic_impacts`): a pair
+                    // rapier held no contact point for when the step began (farther apart than
+                    // its prediction distance, so its solver never saw them) that closed by
+                    // more than that and the slop. It cannot have passed through, but it can
+                    // end deep: a ragdoll's forearm, struck by the pile above, went 126 mm
+                    // into its torso within one step. Such a pair is let go here only when it
+                    // surely stayed apart (`impacts::stayed_apart`).
                     let left_to_rapier =
-                        |ph: ColliderHandle, partner: &rapier3d::geometry::Collider| {
-                            partner
+                        |ph: ColliderHandle,
+                         partner: &rapier3d::geometry::Collider,
+                         pair: Option<&rapier3d::geometry::ContactPair>,
+                         states: &PairStates| {
+                            let dynamic = partner
                                 .parent()
                                 .and_then(|pb| world.bodies.get(pb))
-                                .is_some_and(|b| b.is_dynamic())
-                                && self.hooks.meshes.get(&ph).is_none_or(|pm| {
-                                    let dp = body_motion(
-                                        &self.hooks.prev_poses,
-                                        &world.bodies,
-                                        partner.parent(),
-                                    );
-                                    (d - dp).length() < safe_step(&mesh, &pm.mesh)
-                                })
+                                .is_some_and(|b| b.is_dynamic());
+                            if !dynamic {
+                                return false;
+                            }
+                            let Some(pm) = self.hooks.meshes.get(&ph) else {
+                                return true;
+                            };
+                            let dp = body_motion(
+                                &self.hooks.prev_poses,
+                                &world.bodies,
+                                partner.parent(),
+                            );
+                            let relative = (d - dp).length();
+                            if relative >= safe_step(&mesh, &pm.mesh) {
+                                return false;
+                            }
+                            let had_points = pair.is_some_and(|p| {
+                                p.manifolds().iter().any(|m| !m.points.is_empty())
+                            });
+                            if !self.options.rewind_dynamic_impacts
+                                || had_points
+                                || relative + turn <= prediction + slop
+                            {
+                                return true;
+                            }
+                            stayed_apart(
+                                (world, &self.hooks.meshes, &self.hooks.prev_poses, states),
+                                (ch, &mesh, &pose_now, mesh_exact),
+                                (ph, partner),
+                                relative + turn,
+                                (prediction, slop),
+                            )
                         };
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
@@ -200,7 +239,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 {
                                     continue;
                                 }
-                                if left_to_rapier(ph, partner) {
+                                if left_to_rapier(ph, partner, Some(p), &self.pair_states) {
                                     continue;
                                 }
                                 let view = read(ph, partner, Some(p));
@@ -218,7 +257,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             continue;
                         }
                         // (Most of a pile's swept partners; a slow body's were left out above.)
-                        if view.is_none() && left_to_rapier(ph, partner) {
+                        if view.is_none()
+                            && left_to_rapier(
+                                ph,
+                                partner,
+                                world.narrow_phase.contact_pair(ch, ph),
+                                &self.pair_states,
+                            )
+                        {
                             continue;
                         }
                         // Only pairs rapier itself would solve (sensors, groups, disabled
@@ -273,7 +319,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // dynamic partner within the safe step was already left out above,
                         // before its points were read: `left_to_rapier`; `!may_tunnel` only
                         // restates that.)
-                        if partner_dynamic && (overlapped || !may_tunnel) {
+                        let fresh_impact = self.options.rewind_dynamic_impacts
+                            && rapier.is_none()
+                            && travel > prediction + slop;
+                        if partner_dynamic && (overlapped || (!may_tunnel && !fresh_impact)) {
                             continue;
                         }
                         // (A pair that moved farther is measured on its own path below.)
@@ -288,11 +337,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 continue;
                             }
                         }
-                        let odo = |h: Option<RigidBodyHandle>| {
-                            h.and_then(|h| self.odometers.get(&h).copied())
-                                .unwrap_or(0.0)
-                        };
-                        let (odo_self, odo_partner) = (odo(Some(bh)), odo(partner_body));
                         let push_out = |out: Vector| {
                             push_out(
                                 self.options.reconstruction,
@@ -382,30 +426,74 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // (it answered wrongly for a 4 m plate lying on a 100 m floor).
                             if !self.options.report_touching && !may_tunnel && rapier.is_none() {
                                 // Skip pairs whose overlap cannot have grown past the slop.
+                                let reach = self.hooks.meshes.get(&ch).map_or(0.0, |m| m.reach);
                                 if let Some(st) = self.pair_states.get(&(ch, ph)) {
-                                    let bound = st.overlap
-                                        + (odo_self - st.odo_self)
-                                        + (odo_partner - st.odo_partner);
-                                    if bound <= slop {
+                                    if st.bound(&pose_now, &partner_pose, reach) <= slop {
                                         continue;
                                     }
                                 }
-                                // A contact at a positive distance is one of parry's wrong
-                                // answers (`parry_depth`): such pairs are reconstructed.
-                                let measured =
-                                    parry_depth((partner, &partner_pose), (co, &pose_now))
-                                        .filter(|d| *d >= 0.0);
+                                // A fresh impact of two dynamic bodies keeps the gap of a pair
+                                // still apart too (`measure_apart`). Otherwise a contact at a
+                                // positive distance is one of parry's wrong answers
+                                // (`parry_depth`): such pairs are reconstructed.
+                                let (measured, apart_axis) = if partner_dynamic {
+                                    let kept = self
+                                        .pair_states
+                                        .get(&(ch, ph))
+                                        .and_then(|st| st.world_axis(&partner_pose));
+                                    measure_apart(
+                                        (partner, &partner_pose, &partner_mesh),
+                                        (co, &pose_now, &mesh),
+                                        kept,
+                                        (travel, slop),
+                                    )
+                                } else {
+                                    let depth =
+                                        parry_depth((partner, &partner_pose), (co, &pose_now));
+                                    (depth.filter(|d| *d >= 0.0), None)
+                                };
                                 if let Some(overlap) = measured {
-                                    self.pair_states.insert(
-                                        (ch, ph),
-                                        PairState {
+                                    let state = match apart_axis {
+                                        Some(n) => PairState::apart_along(
                                             overlap,
-                                            odo_self,
-                                            odo_partner,
-                                        },
-                                    );
+                                            &pose_now,
+                                            &partner_pose,
+                                            n,
+                                        ),
+                                        None => PairState::new(overlap, &pose_now, &partner_pose),
+                                    };
+                                    self.pair_states.insert((ch, ph), state);
                                     if overlap <= slop {
                                         continue;
+                                    }
+                                    // A fresh impact of two dynamic bodies: both rewound to
+                                    // their first touch, unless your hooks remove the contact.
+                                    if let Some(pb) = partner_body.filter(|_| partner_dynamic) {
+                                        let rewind = match fresh_impact_rewind(
+                                            world,
+                                            (&self.hooks.prev_poses, &self.hooks.inner),
+                                            (a, b),
+                                            (ph, partner, partner_pose),
+                                            (co, pose_now),
+                                            (bh, pb),
+                                            overlap,
+                                        ) {
+                                            FreshImpact::NoShapeCast => None,
+                                            FreshImpact::Leave => continue,
+                                            FreshImpact::Rewind(_)
+                                                if !self.options.correct_poses =>
+                                            {
+                                                continue
+                                            }
+                                            FreshImpact::Rewind(r) => Some(r),
+                                        };
+                                        if let Some(rewind) = rewind {
+                                            apply_rewind(world, &rewind);
+                                            moved_bodies.extend(rewind.map(|(h, _, _)| h));
+                                            self.record_correction(world, (ch, co_rel, bh), ph);
+                                            moved = true;
+                                            break;
+                                        }
                                     }
                                 }
                             }
@@ -539,23 +627,27 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 continue;
                             }
                         }
-                        moved_bodies.push(bh);
-                        moved_bodies.extend(apply_correction(
-                            world,
-                            &config,
-                            (bh, co_rel, &pose_now),
-                            (ph, partner_body),
-                        ));
-                        self.pair_states.insert(
-                            (ch, ph),
-                            PairState {
-                                overlap: 0.0,
-                                odo_self,
-                                odo_partner,
-                            },
-                        );
+                        // (A fresh impact parry has no shape cast for, such as two dynamic
+                        // TriMeshes: rewound to the reconstruction's first touch.)
+                        let rewound = partner_body
+                            .filter(|_| fresh_impact && partner_dynamic && on_path)
+                            .and_then(|pb| {
+                                rewind_from(world, &self.hooks.prev_poses, &config, (bh, pb))
+                            });
+                        if let Some(rewind) = rewound {
+                            apply_rewind(world, &rewind);
+                            moved_bodies.extend(rewind.map(|(h, _, _)| h));
+                        } else {
+                            moved_bodies.push(bh);
+                            moved_bodies.extend(apply_correction(
+                                world,
+                                &config,
+                                (bh, co_rel, &pose_now),
+                                (ph, partner_body),
+                            ));
+                        }
+                        self.record_correction(world, (ch, co_rel, bh), ph);
                         moved = true;
-                        self.corrections += 1;
                         break;
                     }
                 }
@@ -566,5 +658,23 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
         sync_moved_colliders(world, &mut moved_bodies);
         self.sync_hook_flags(world);
+    }
+
+    /// Counts a correction of collider `ch` (offset `co_rel` on body `bh`) against collider
+    /// `ph`, and records the pair as touching at the poses the correction left.
+    fn record_correction(
+        &mut self,
+        world: &PhysicsWorld,
+        (ch, co_rel, bh): (ColliderHandle, Option<Pose>, RigidBodyHandle),
+        ph: ColliderHandle,
+    ) {
+        self.corrections += 1;
+        let (Some(partner), Some(body)) = (world.colliders.get(ph), world.bodies.get(bh)) else {
+            return;
+        };
+        let partner_pose = collider_pose_now(&world.bodies, partner);
+        let pose = co_rel.map_or(*body.position(), |r| *body.position() * r);
+        self.pair_states
+            .insert((ch, ph), PairState::new(0.0, &pose, &partner_pose));
     }
 }

@@ -4,13 +4,68 @@
 use super::rapier_contacts::RapierContact;
 use super::*;
 use crate::geometry::ContactConfiguration;
+use crate::hooks::step_motion::point_travel;
 
-/// The overlap of a pair when it was last measured, and both bodies' odometers then.
+/// The overlap of a pair when it was last measured, and the mover's collider pose relative
+/// to the partner's then.
+///
+/// The overlap of two rigid shapes is a function of their relative pose alone, and moves by
+/// no more than the mover's points moved in the partner's frame: at a later relative pose it
+/// is at most [`PairState::bound`], however both bodies got there (their steps, the guard's
+/// corrections). Two bodies falling side by side keep their bound for as long as they keep
+/// their places. (The bodies' odometers, summed paths, bounded it before: every step of a
+/// falling pile spent them, and a correction was left out of them.)
+///
+/// A pair found apart also keeps the direction that separated it (in the partner's frame):
+/// bodies move little between steps, and the same direction usually separates them again at
+/// two support points, where parry's query walks GJK over every vertex of a hull.
 #[derive(Copy, Clone, Debug)]
 pub(super) struct PairState {
     pub overlap: Real,
-    pub odo_self: Real,
-    pub odo_partner: Real,
+    pub relative: Pose,
+    pub axis: Option<Vector>,
+}
+
+/// The [`PairState`]s of the pairs the guard measured, by (mover's collider, partner's).
+pub(super) type PairStates = HashMap<(ColliderHandle, ColliderHandle), PairState>;
+
+impl PairState {
+    /// The pair measured `overlap` deep with the mover's collider at `pose` and the partner's
+    /// at `partner_pose`.
+    pub fn new(overlap: Real, pose: &Pose, partner_pose: &Pose) -> Self {
+        Self {
+            overlap,
+            relative: partner_pose.inverse() * *pose,
+            axis: None,
+        }
+    }
+
+    /// [`PairState::new`], with the world direction `axis` (out of the partner toward the
+    /// mover) that separated the pair.
+    pub fn apart_along(overlap: Real, pose: &Pose, partner_pose: &Pose, axis: Vector) -> Self {
+        Self {
+            axis: Some(partner_pose.rotation.inverse() * axis).filter(|a| a.is_finite()),
+            ..Self::new(overlap, pose, partner_pose)
+        }
+    }
+
+    /// The separating direction kept, in world coordinates for the partner at `partner_pose`.
+    pub fn world_axis(&self, partner_pose: &Pose) -> Option<Vector> {
+        self.axis.map(|a| partner_pose.rotation * a)
+    }
+
+    /// The most the pair can overlap with the mover's collider at `pose` and the partner's at
+    /// `partner_pose`; `reach` bounds how far the mover's points lie from its collider's
+    /// origin. Infinite when a pose is not finite.
+    pub fn bound(&self, pose: &Pose, partner_pose: &Pose, reach: Real) -> Real {
+        let now = partner_pose.inverse() * *pose;
+        let b = self.overlap + point_travel(&self.relative, &now, reach);
+        if b.is_finite() {
+            b
+        } else {
+            Real::INFINITY
+        }
+    }
 }
 
 /// One pair as the guard reads it, before deciding anything: the partner's pose now, its
@@ -69,18 +124,27 @@ pub(super) fn within_along(
     n: Vector,
     gap: Real,
 ) -> bool {
-    let (Some(sp), Some(sm)) = (
-        partner.shape().as_support_map(),
-        mover.shape().as_support_map(),
-    ) else {
-        return false;
-    };
+    overlap_along((partner, partner_pose), (mover, pose), n).is_some_and(|o| o < gap)
+}
+
+/// How far `mover` (at `pose`) and `partner` (at `partner_pose`) overlap along the unit
+/// direction `n` (out of `partner` toward `mover`): the highest point of `partner` along `n`
+/// less the lowest of `mover` ([`within_along`]). It bounds the depth from above, and a
+/// negative answer is a separating axis: the shapes are at least that far apart. `None` when
+/// either shape has no support map or the answer is not finite.
+pub(super) fn overlap_along(
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (mover, pose): (&rapier3d::geometry::Collider, &Pose),
+    n: Vector,
+) -> Option<Real> {
+    let sp = partner.shape().as_support_map()?;
+    let sm = mover.shape().as_support_map()?;
     let rel = partner_pose.inv_mul(pose);
     let n = partner_pose.rotation.inverse() * n;
     let top = sp.local_support_point_toward(n).dot(n);
     let bottom = sm.support_point_toward(&rel, -n).dot(n);
     let overlap = top - bottom;
-    overlap.is_finite() && overlap < gap
+    overlap.is_finite().then_some(overlap)
 }
 
 /// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
@@ -95,6 +159,28 @@ pub(super) fn parry_depth(
     parry3d::query::contact(partner_pose, partner.shape(), pose, mover.shape(), 0.0)
         .ok()
         .map(|c| c.map_or(0.0, |c| -c.dist))
+}
+
+/// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
+/// query with a prediction of `margin`: negative for a pair apart (minus its distance, or
+/// minus `margin` when it is farther), `None` when parry has no query for the shapes or the
+/// answer is not finite. (Unlike [`parry_depth`], a positive distance is taken as parry's
+/// answer.)
+/// With the overlap, the contact's normal (world, out of `partner`) when parry found one.
+pub(super) fn parry_overlap_within(
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (mover, pose): (&rapier3d::geometry::Collider, &Pose),
+    margin: Real,
+) -> Option<(Real, Option<Vector>)> {
+    let margin = if margin.is_finite() {
+        margin.max(0.0)
+    } else {
+        0.0
+    };
+    parry3d::query::contact(partner_pose, partner.shape(), pose, mover.shape(), margin)
+        .ok()
+        .map(|c| c.map_or((-margin, None), |c| (-c.dist, Some(c.normal1))))
+        .filter(|(d, n)| d.is_finite() && n.is_none_or(|n| n.is_finite()))
 }
 
 /// The way out of an overlap along `out` (a world direction out of the partner) for the mover

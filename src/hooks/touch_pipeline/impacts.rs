@@ -1,0 +1,244 @@
+//! Fresh impacts of two dynamic bodies ([`TouchOptions::rewind_dynamic_impacts`]): a pair
+//! rapier held no contact point for when the step began, that closed by more than rapier's
+//! prediction distance but less than its safe step. It cannot have passed through, but
+//! rapier's solver never saw it. The guard tells the many near pairs of a pile that stayed
+//! apart cheaply ([`boxes_meet`], [`measure_apart`]), and rewinds a pair that got deeper than
+//! the slop to its first touch on both bodies' paths ([`first_touch_of_bodies`],
+//! [`impact_rewind`]).
+
+use super::pair_view::{overlap_along, parry_overlap_within, PairStates};
+use super::rapier_contacts::collider_pose_now;
+use super::*;
+use crate::geometry::{ContactConfiguration, RigidMotion};
+use parry3d::bounding_volume::BoundingVolume;
+
+/// Whether two touch meshes' boxes at their poses meet, each loosened by `slop` (a mesh and
+/// its pose, and whether the mesh is the shape itself rather than a tessellation). A curved
+/// shape's tessellation has the shape's extreme points along its axes; its box is loosened
+/// by 2 % of its diagonal more for what the tessellation's faces miss.
+fn boxes_meet(
+    (mesh, pose, exact): (&TouchMesh, &Pose, bool),
+    (partner_mesh, partner_pose, partner_exact): (&TouchMesh, &Pose, bool),
+    slop: Real,
+) -> bool {
+    let boxed = |m: &TouchMesh, pose: &Pose, exact: bool| {
+        let sag = if exact { 0.0 } else { 0.02 * m.scale() };
+        m.local_aabb().transform_by(pose).loosened(slop + sag)
+    };
+    boxed(mesh, pose, exact).intersects(&boxed(partner_mesh, partner_pose, partner_exact))
+}
+
+/// Whether a dynamic pair rapier held no contact point for, whose mover moved `travel`
+/// relative to the partner over the step (translation plus the mover's turn), is sure to
+/// have stayed within the slop (`prediction` and `slop`: rapier's prediction distance and
+/// the guard's slop), cheapest test first: the partner's turn added, the bound its last
+/// measure left ([`PairState`] in `states`), its boxes at the poses now (most of a falling
+/// pile's neighbours without rapier's points are still apart). The mover: its collider,
+/// touch mesh, pose now and whether the mesh is exact; the partner: its collider.
+pub(super) fn stayed_apart(
+    (world, meshes, prev_poses, states): (
+        &PhysicsWorld,
+        &HashMap<ColliderHandle, CachedMesh>,
+        &PoseHistory,
+        &PairStates,
+    ),
+    (ch, mesh, pose, exact): (ColliderHandle, &TouchMesh, &Pose, bool),
+    (ph, partner): (ColliderHandle, &rapier3d::geometry::Collider),
+    travel: Real,
+    (prediction, slop): (Real, Real),
+) -> bool {
+    let Some(pm) = meshes.get(&ph) else {
+        return true;
+    };
+    let partner_pose = collider_pose_now(&world.bodies, partner);
+    let partner_prev = previous_collider_pose(prev_poses, partner, partner_pose);
+    let partner_turn = partner_prev.rotation.angle_between(partner_pose.rotation)
+        * collider_reach(meshes, ph, partner);
+    if travel + partner_turn <= prediction + slop {
+        return true;
+    }
+    let reach = meshes.get(&ch).map_or(0.0, |m| m.reach);
+    if states
+        .get(&(ch, ph))
+        .is_some_and(|st| st.bound(pose, &partner_pose, reach) <= slop)
+    {
+        return true;
+    }
+    !boxes_meet(
+        (mesh, pose, exact),
+        (&pm.mesh, &partner_pose, pm.exact),
+        slop,
+    )
+}
+
+/// How deep two dynamic colliders overlap, or how far apart they are (negative), and the
+/// direction that separated them (world, out of the partner) when one did.
+///
+/// Two support points first, along `kept` (the direction that separated the pair when it was
+/// last measured: bodies move little between steps) and then along the axis between the two
+/// boxes' centres; most pairs of a falling pile are told apart there. Otherwise parry's
+/// contact query, looking for a gap up to four times the pair's `travel` this step (a
+/// positive distance is taken as parry's answer). The gap kept in the pair's state lets the
+/// next steps skip it while it keeps its distance: one query a step for every near pair of a
+/// falling pile cost more than the rest of the guard. `(None, None)` when parry has no query
+/// for the shapes.
+pub(super) fn measure_apart(
+    (partner, partner_pose, partner_mesh): (&rapier3d::geometry::Collider, &Pose, &TouchMesh),
+    (mover, pose, mesh): (&rapier3d::geometry::Collider, &Pose, &TouchMesh),
+    kept: Option<Vector>,
+    (travel, slop): (Real, Real),
+) -> (Option<Real>, Option<Vector>) {
+    let centres = (*pose * mesh.local_aabb().center()
+        - *partner_pose * partner_mesh.local_aabb().center())
+    .try_normalize();
+    let separated = kept.into_iter().chain(centres).find_map(|n| {
+        overlap_along((partner, partner_pose), (mover, pose), n)
+            .filter(|o| *o < -slop)
+            .map(|o| (o, n))
+    });
+    if let Some((o, n)) = separated {
+        return (Some(o), Some(n));
+    }
+    match parry_overlap_within((partner, partner_pose), (mover, pose), 4.0 * travel) {
+        Some((o, n)) => (Some(o), n.filter(|_| o < 0.0)),
+        None => (None, None),
+    }
+}
+
+/// First touch of two colliders over the step, each moving with its body from where it was
+/// when the step began ([`PoseHistory`]) to its pose now (`partner_pose`, `pose`), turning
+/// about its body's centre of mass ([`RigidMotion::first_touch_of_two`]: parry's nonlinear
+/// shape cast, the query rapier's CCD asks; the crate's reconstruction walks one body
+/// against the other held still, and cost five times as much on rapier's CCD stress scene).
+/// The fraction of the step, the normal out of the partner, and the touching point.
+fn first_touch_of_bodies(
+    world: &PhysicsWorld,
+    prev_poses: &PoseHistory,
+    (partner, partner_pose): (&rapier3d::geometry::Collider, Pose),
+    (mover, pose): (&rapier3d::geometry::Collider, Pose),
+) -> Option<(Real, Vector, Vector)> {
+    let motion = |c: &rapier3d::geometry::Collider, now: Pose| {
+        let prev = previous_collider_pose(prev_poses, c, now);
+        let center = c
+            .parent()
+            .and_then(|h| world.bodies.get(h))
+            .map_or(Vector::ZERO, |b| {
+                let com = b.local_center_of_mass();
+                c.position_wrt_parent()
+                    .map_or(com, |rel| rel.inverse_transform_point(com))
+            });
+        RigidMotion::new(prev, now, center)
+    };
+    RigidMotion::first_touch_of_two(
+        partner.shape(),
+        &motion(partner, partner_pose),
+        mover.shape(),
+        &motion(mover, pose),
+    )
+}
+
+/// A fresh impact between two dynamic bodies (neither in rapier's contacts when the step
+/// began), rewound: both bodies go back along their own step motions to `t`, the fraction of
+/// the step at which they first touched, and the velocity that still closes along the contact
+/// normal `n` (out of `pb`'s collider toward `bh`'s) is taken off as a plastic impact would,
+/// shared by inverse mass (momentum conserved). Neither is pushed anywhere it was not during
+/// the step: splitting a push between them instead drove one into a third body of a falling
+/// pile (rapier's convex-hull stress scene: 0.4 m pushes, a pair 0.9 m deep). `None` when
+/// either is not a dynamic body with a pose at the step's start.
+fn impact_rewind(
+    world: &PhysicsWorld,
+    prev_poses: &PoseHistory,
+    (t, n): (Real, Vector),
+    (bh, pb): (RigidBodyHandle, RigidBodyHandle),
+) -> Option<[(RigidBodyHandle, Pose, Vector); 2]> {
+    let t = t.clamp(0.0, 1.0);
+    let body_at = |h: RigidBodyHandle| -> Option<(Pose, Real, Vector)> {
+        let b = world.bodies.get(h).filter(|b| b.is_dynamic())?;
+        let prev = *prev_poses.get(&h)?;
+        let motion = RigidMotion::new(prev, *b.position(), b.local_center_of_mass());
+        let pose = motion.pose_at(t);
+        let inv_mass = if b.mass() > 0.0 { 1.0 / b.mass() } else { 0.0 };
+        (pose.is_finite() && b.linvel().is_finite()).then_some((pose, inv_mass, b.linvel()))
+    };
+    let (pose_a, inv_a, v_a) = body_at(bh)?;
+    let (pose_b, inv_b, v_b) = body_at(pb)?;
+    let impulse = if inv_a + inv_b > 0.0 {
+        n * (v_a - v_b).dot(n).min(0.0) / (inv_a + inv_b)
+    } else {
+        Vector::ZERO
+    };
+    let impulse = if impulse.is_finite() {
+        impulse
+    } else {
+        Vector::ZERO
+    };
+    Some([
+        (bh, pose_a, v_a - impulse * inv_a),
+        (pb, pose_b, v_b + impulse * inv_b),
+    ])
+}
+
+/// What a fresh impact of two dynamic bodies comes to ([`fresh_impact_rewind`]).
+pub(super) enum FreshImpact {
+    /// parry has no nonlinear shape cast for the shapes (two TriMeshes): the reconstruction
+    /// is asked instead ([`rewind_from`]).
+    NoShapeCast,
+    /// Nothing to do: no touch on the step, the user's hooks remove the contact, or a body
+    /// is not dynamic or has no pose at the step's start.
+    Leave,
+    /// The two bodies' poses and velocities at their first touch ([`apply_rewind`]).
+    Rewind([(RigidBodyHandle, Pose, Vector); 2]),
+}
+
+/// A fresh impact of dynamic collider `co` (pose now `pose`, on body `bh`) with dynamic
+/// collider `partner` (handle `ph`, pose now `partner_pose`, on body `pb`), found `overlap`
+/// deep: their first touch ([`first_touch_of_bodies`]), unless the user's
+/// `modify_solver_contacts` removes that contact (asked in rapier's pair order `(a, b)`, as
+/// for every correction), and the rewind to it ([`impact_rewind`]).
+pub(super) fn fresh_impact_rewind(
+    world: &PhysicsWorld,
+    (prev_poses, hooks): (&PoseHistory, &dyn PhysicsHooks),
+    (a, b): (ColliderHandle, ColliderHandle),
+    (ph, partner, partner_pose): (ColliderHandle, &rapier3d::geometry::Collider, Pose),
+    (co, pose): (&rapier3d::geometry::Collider, Pose),
+    (bh, pb): (RigidBodyHandle, RigidBodyHandle),
+    overlap: Real,
+) -> FreshImpact {
+    let Some((t, n, at)) =
+        first_touch_of_bodies(world, prev_poses, (partner, partner_pose), (co, pose))
+    else {
+        return FreshImpact::NoShapeCast;
+    };
+    if user_removes_contact(world, hooks, (a, b), ph, n, at, overlap) {
+        return FreshImpact::Leave;
+    }
+    impact_rewind(world, prev_poses, (t, n), (bh, pb))
+        .map_or(FreshImpact::Leave, FreshImpact::Rewind)
+}
+
+/// The rewind of a fresh impact to the first touch the reconstruction found (`config`, of
+/// body `bh`'s collider against body `pb`'s): for shapes parry has no shape cast for.
+pub(super) fn rewind_from(
+    world: &PhysicsWorld,
+    prev_poses: &PoseHistory,
+    config: &ContactConfiguration,
+    (bh, pb): (RigidBodyHandle, RigidBodyHandle),
+) -> Option<[(RigidBodyHandle, Pose, Vector); 2]> {
+    let (t, patch) = (config.time_of_impact?, config.patches.first()?);
+    let n = if patch.normal.dot(config.reversing_vector) < 0.0 {
+        -patch.normal
+    } else {
+        patch.normal
+    };
+    impact_rewind(world, prev_poses, (t, n), (bh, pb))
+}
+
+/// Moves the bodies of an [`impact_rewind`] to their poses and velocities.
+pub(super) fn apply_rewind(world: &mut PhysicsWorld, rewind: &[(RigidBodyHandle, Pose, Vector)]) {
+    for (h, pose, v) in rewind {
+        if let Some(b) = world.bodies.get_mut(*h) {
+            b.set_position(*pose, true);
+            b.set_linvel(*v, true);
+        }
+    }
+}
