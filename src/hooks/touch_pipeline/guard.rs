@@ -474,7 +474,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                             (&self.hooks.prev_poses, &self.hooks.inner),
                                             (a, b),
                                             (ph, partner, partner_pose),
-                                            (co, pose_now),
+                                            (ch, co, pose_now),
                                             (bh, pb),
                                             overlap,
                                         ) {
@@ -632,7 +632,13 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let rewound = partner_body
                             .filter(|_| fresh_impact && partner_dynamic && on_path)
                             .and_then(|pb| {
-                                rewind_from(world, &self.hooks.prev_poses, &config, (bh, pb))
+                                rewind_from(
+                                    world,
+                                    &self.hooks.prev_poses,
+                                    &config,
+                                    (bh, pb),
+                                    (ch, ph),
+                                )
                             });
                         if let Some(rewind) = rewound {
                             apply_rewind(world, &rewind);

@@ -7,7 +7,7 @@
 //! [`impact_rewind`]).
 
 use super::pair_view::{overlap_along, parry_overlap_within, PairStates};
-use super::rapier_contacts::collider_pose_now;
+use super::rapier_contacts::{collider_pose_now, supported};
 use super::*;
 use crate::geometry::{ContactConfiguration, RigidMotion};
 use parry3d::bounding_volume::BoundingVolume;
@@ -140,33 +140,40 @@ fn first_touch_of_bodies(
 /// A fresh impact between two dynamic bodies (neither in rapier's contacts when the step
 /// began), rewound: both bodies go back along their own step motions to `t`, the fraction of
 /// the step at which they first touched, and the velocity that still closes along the contact
-/// normal `n` (out of `pb`'s collider toward `bh`'s) is taken off as a plastic impact would,
-/// shared by inverse mass (momentum conserved). Neither is pushed anywhere it was not during
-/// the step: splitting a push between them instead drove one into a third body of a falling
-/// pile (rapier's convex-hull stress scene: 0.4 m pushes, a pair 0.9 m deep). `None` when
-/// either is not a dynamic body with a pose at the step's start.
+/// normal `n` (out of `pb`'s collider `ph` toward `bh`'s collider `ch`) is taken off as a
+/// plastic impact would, shared by inverse mass (momentum conserved). Neither is pushed
+/// anywhere it was not during the step: splitting a push between them instead drove one into
+/// a third body of a falling pile (rapier's convex-hull stress scene: 0.4 m pushes, a pair
+/// 0.9 m deep). A body resting on a fixed or kinematic collider is held where it is and takes
+/// no share, as in [`super::correction::apply_correction`]: its share of the impact drove a
+/// thin dynamic plate, struck at 20 m/s, 4 mm into the floor under it. `None` when both rest
+/// so, or either is not a dynamic body with a pose at the step's start.
 fn impact_rewind(
     world: &PhysicsWorld,
     prev_poses: &PoseHistory,
     (t, n): (Real, Vector),
     (bh, pb): (RigidBodyHandle, RigidBodyHandle),
+    (ch, ph): (ColliderHandle, ColliderHandle),
 ) -> Option<[(RigidBodyHandle, Pose, Vector); 2]> {
     let t = t.clamp(0.0, 1.0);
-    let body_at = |h: RigidBodyHandle| -> Option<(Pose, Real, Vector)> {
+    let body_at = |h: RigidBodyHandle, c: ColliderHandle| -> Option<(Pose, Real, Vector)> {
         let b = world.bodies.get(h).filter(|b| b.is_dynamic())?;
+        let v = b.linvel();
+        if supported(world, c) {
+            return v.is_finite().then_some((*b.position(), 0.0, v));
+        }
         let prev = *prev_poses.get(&h)?;
         let motion = RigidMotion::new(prev, *b.position(), b.local_center_of_mass());
         let pose = motion.pose_at(t);
         let inv_mass = if b.mass() > 0.0 { 1.0 / b.mass() } else { 0.0 };
-        (pose.is_finite() && b.linvel().is_finite()).then_some((pose, inv_mass, b.linvel()))
+        (pose.is_finite() && v.is_finite()).then_some((pose, inv_mass, v))
     };
-    let (pose_a, inv_a, v_a) = body_at(bh)?;
-    let (pose_b, inv_b, v_b) = body_at(pb)?;
-    let impulse = if inv_a + inv_b > 0.0 {
-        n * (v_a - v_b).dot(n).min(0.0) / (inv_a + inv_b)
-    } else {
-        Vector::ZERO
-    };
+    let (pose_a, inv_a, v_a) = body_at(bh, ch)?;
+    let (pose_b, inv_b, v_b) = body_at(pb, ph)?;
+    if inv_a + inv_b <= 0.0 {
+        return None;
+    }
+    let impulse = n * (v_a - v_b).dot(n).min(0.0) / (inv_a + inv_b);
     let impulse = if impulse.is_finite() {
         impulse
     } else {
@@ -190,7 +197,7 @@ pub(super) enum FreshImpact {
     Rewind([(RigidBodyHandle, Pose, Vector); 2]),
 }
 
-/// A fresh impact of dynamic collider `co` (pose now `pose`, on body `bh`) with dynamic
+/// A fresh impact of dynamic collider `co` (handle `ch`, pose now `pose`, on body `bh`) with dynamic
 /// collider `partner` (handle `ph`, pose now `partner_pose`, on body `pb`), found `overlap`
 /// deep: their first touch ([`first_touch_of_bodies`]), unless the user's
 /// `modify_solver_contacts` removes that contact (asked in rapier's pair order `(a, b)`, as
@@ -200,7 +207,7 @@ pub(super) fn fresh_impact_rewind(
     (prev_poses, hooks): (&PoseHistory, &dyn PhysicsHooks),
     (a, b): (ColliderHandle, ColliderHandle),
     (ph, partner, partner_pose): (ColliderHandle, &rapier3d::geometry::Collider, Pose),
-    (co, pose): (&rapier3d::geometry::Collider, Pose),
+    (ch, co, pose): (ColliderHandle, &rapier3d::geometry::Collider, Pose),
     (bh, pb): (RigidBodyHandle, RigidBodyHandle),
     overlap: Real,
 ) -> FreshImpact {
@@ -212,17 +219,19 @@ pub(super) fn fresh_impact_rewind(
     if user_removes_contact(world, hooks, (a, b), ph, n, at, overlap) {
         return FreshImpact::Leave;
     }
-    impact_rewind(world, prev_poses, (t, n), (bh, pb))
+    impact_rewind(world, prev_poses, (t, n), (bh, pb), (ch, ph))
         .map_or(FreshImpact::Leave, FreshImpact::Rewind)
 }
 
 /// The rewind of a fresh impact to the first touch the reconstruction found (`config`, of
-/// body `bh`'s collider against body `pb`'s): for shapes parry has no shape cast for.
+/// body `bh`'s collider `ch` against body `pb`'s collider `ph`): for shapes parry has no
+/// shape cast for.
 pub(super) fn rewind_from(
     world: &PhysicsWorld,
     prev_poses: &PoseHistory,
     config: &ContactConfiguration,
     (bh, pb): (RigidBodyHandle, RigidBodyHandle),
+    (ch, ph): (ColliderHandle, ColliderHandle),
 ) -> Option<[(RigidBodyHandle, Pose, Vector); 2]> {
     let (t, patch) = (config.time_of_impact?, config.patches.first()?);
     let n = if patch.normal.dot(config.reversing_vector) < 0.0 {
@@ -230,7 +239,7 @@ pub(super) fn rewind_from(
     } else {
         patch.normal
     };
-    impact_rewind(world, prev_poses, (t, n), (bh, pb))
+    impact_rewind(world, prev_poses, (t, n), (bh, pb), (ch, ph))
 }
 
 /// Moves the bodies of an [`impact_rewind`] to their poses and velocities.
