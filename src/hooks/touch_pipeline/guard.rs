@@ -3,9 +3,7 @@
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
 use super::correction::{apply_correction, undone_almost_whole};
-use super::impacts::{
-    apply_rewind, fresh_impact_rewind, measure_apart, rewind_from, stayed_apart, FreshImpact,
-};
+use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
     parry_depth, push_out, safe_step, within_along, PairState, PairStates, PairView,
 };
@@ -425,76 +423,28 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // read them, is reconstructed: parry's contact query is not asked
                             // (it answered wrongly for a 4 m plate lying on a 100 m floor).
                             if !self.options.report_touching && !may_tunnel && rapier.is_none() {
-                                // Skip pairs whose overlap cannot have grown past the slop.
                                 let reach = self.hooks.meshes.get(&ch).map_or(0.0, |m| m.reach);
-                                if let Some(st) = self.pair_states.get(&(ch, ph)) {
-                                    if st.bound(&pose_now, &partner_pose, reach) <= slop {
-                                        continue;
+                                let measured = measure_slow_pair(
+                                    world,
+                                    (&self.hooks.prev_poses, &self.hooks.inner),
+                                    &mut self.pair_states,
+                                    (ch, co, pose_now, &mesh, reach),
+                                    (ph, partner, partner_pose, &partner_mesh),
+                                    (a, b),
+                                    partner_body.filter(|_| partner_dynamic).map(|pb| (bh, pb)),
+                                    (travel, slop),
+                                );
+                                match measured {
+                                    SlowPair::Within => continue,
+                                    SlowPair::Rewind(_) if !self.options.correct_poses => continue,
+                                    SlowPair::Rewind(rewind) => {
+                                        apply_rewind(world, &rewind);
+                                        moved_bodies.extend(rewind.map(|(h, _, _)| h));
+                                        self.record_correction(world, (ch, co_rel, bh), ph);
+                                        moved = true;
+                                        break;
                                     }
-                                }
-                                // A fresh impact of two dynamic bodies keeps the gap of a pair
-                                // still apart too (`measure_apart`). Otherwise a contact at a
-                                // positive distance is one of parry's wrong answers
-                                // (`parry_depth`): such pairs are reconstructed.
-                                let (measured, apart_axis) = if partner_dynamic {
-                                    let kept = self
-                                        .pair_states
-                                        .get(&(ch, ph))
-                                        .and_then(|st| st.world_axis(&partner_pose));
-                                    measure_apart(
-                                        (partner, &partner_pose, &partner_mesh),
-                                        (co, &pose_now, &mesh),
-                                        kept,
-                                        (travel, slop),
-                                    )
-                                } else {
-                                    let depth =
-                                        parry_depth((partner, &partner_pose), (co, &pose_now));
-                                    (depth.filter(|d| *d >= 0.0), None)
-                                };
-                                if let Some(overlap) = measured {
-                                    let state = match apart_axis {
-                                        Some(n) => PairState::apart_along(
-                                            overlap,
-                                            &pose_now,
-                                            &partner_pose,
-                                            n,
-                                        ),
-                                        None => PairState::new(overlap, &pose_now, &partner_pose),
-                                    };
-                                    self.pair_states.insert((ch, ph), state);
-                                    if overlap <= slop {
-                                        continue;
-                                    }
-                                    // A fresh impact of two dynamic bodies: both rewound to
-                                    // their first touch, unless your hooks remove the contact.
-                                    if let Some(pb) = partner_body.filter(|_| partner_dynamic) {
-                                        let rewind = match fresh_impact_rewind(
-                                            world,
-                                            (&self.hooks.prev_poses, &self.hooks.inner),
-                                            (a, b),
-                                            (ph, partner, partner_pose),
-                                            (ch, co, pose_now),
-                                            (bh, pb),
-                                            overlap,
-                                        ) {
-                                            FreshImpact::NoShapeCast => None,
-                                            FreshImpact::Leave => continue,
-                                            FreshImpact::Rewind(_)
-                                                if !self.options.correct_poses =>
-                                            {
-                                                continue
-                                            }
-                                            FreshImpact::Rewind(r) => Some(r),
-                                        };
-                                        if let Some(rewind) = rewind {
-                                            apply_rewind(world, &rewind);
-                                            moved_bodies.extend(rewind.map(|(h, _, _)| h));
-                                            self.record_correction(world, (ch, co_rel, bh), ph);
-                                            moved = true;
-                                            break;
-                                        }
-                                    }
+                                    SlowPair::Reconstruct => {}
                                 }
                             }
                             let Some(config) = pair_configuration(

@@ -1,12 +1,12 @@
-//! Fresh impacts of two dynamic bodies ([`TouchOptions::rewind_dynamic_impacts`]): a pair
-//! rapier held no contact point for when the step began, that closed by more than rapier's
-//! prediction distance but less than its safe step. It cannot have passed through, but
-//! rapier's solver never saw it. The guard tells the many near pairs of a pile that stayed
-//! apart cheaply ([`boxes_meet`], [`measure_apart`]), and rewinds a pair that got deeper than
-//! the slop to its first touch on both bodies' paths ([`first_touch_of_bodies`],
-//! [`impact_rewind`]).
+//! Slow pairs rapier had no contact point for ([`measure_slow_pair`]), and among them fresh
+//! impacts of two dynamic bodies ([`TouchOptions::rewind_dynamic_impacts`]): a pair that
+//! closed by more than rapier's prediction distance but less than its safe step. It cannot
+//! have passed through, but rapier's solver never saw it. The guard tells the many near
+//! pairs of a pile that stayed apart cheaply ([`stayed_apart`], [`measure_apart`]), and
+//! rewinds a pair that got deeper than the slop to its first touch on both bodies' paths
+//! ([`first_touch_of_bodies`], [`impact_rewind`]).
 
-use super::pair_view::{overlap_along, parry_overlap_within, PairStates};
+use super::pair_view::{overlap_along, parry_depth, parry_overlap_within, PairState, PairStates};
 use super::rapier_contacts::{collider_pose_now, supported};
 use super::*;
 use crate::geometry::{ContactConfiguration, RigidMotion};
@@ -82,7 +82,7 @@ pub(super) fn stayed_apart(
 /// next steps skip it while it keeps its distance: one query a step for every near pair of a
 /// falling pile cost more than the rest of the guard. `(None, None)` when parry has no query
 /// for the shapes.
-pub(super) fn measure_apart(
+fn measure_apart(
     (partner, partner_pose, partner_mesh): (&rapier3d::geometry::Collider, &Pose, &TouchMesh),
     (mover, pose, mesh): (&rapier3d::geometry::Collider, &Pose, &TouchMesh),
     kept: Option<Vector>,
@@ -186,7 +186,7 @@ fn impact_rewind(
 }
 
 /// What a fresh impact of two dynamic bodies comes to ([`fresh_impact_rewind`]).
-pub(super) enum FreshImpact {
+enum FreshImpact {
     /// parry has no nonlinear shape cast for the shapes (two TriMeshes): the reconstruction
     /// is asked instead ([`rewind_from`]).
     NoShapeCast,
@@ -202,7 +202,7 @@ pub(super) enum FreshImpact {
 /// deep: their first touch ([`first_touch_of_bodies`]), unless the user's
 /// `modify_solver_contacts` removes that contact (asked in rapier's pair order `(a, b)`, as
 /// for every correction), and the rewind to it ([`impact_rewind`]).
-pub(super) fn fresh_impact_rewind(
+fn fresh_impact_rewind(
     world: &PhysicsWorld,
     (prev_poses, hooks): (&PoseHistory, &dyn PhysicsHooks),
     (a, b): (ColliderHandle, ColliderHandle),
@@ -240,6 +240,98 @@ pub(super) fn rewind_from(
         patch.normal
     };
     impact_rewind(world, prev_poses, (t, n), (bh, pb), (ch, ph))
+}
+
+/// What a slow pair rapier had no contact point for comes to ([`measure_slow_pair`]).
+pub(super) enum SlowPair {
+    /// Within the slop: nothing to do.
+    Within,
+    /// A fresh impact of two dynamic bodies, rewound ([`apply_rewind`]).
+    Rewind([(RigidBodyHandle, Pose, Vector); 2]),
+    /// Deeper than the slop, or not measured: the reconstruction decides.
+    Reconstruct,
+}
+
+/// A pair that cannot have tunneled (it closed by less than its safe step) and that rapier had
+/// no contact point for, measured: mover `co` (handle `ch`, pose now `pose`, touch mesh `mesh`,
+/// its points within `reach` of its origin) against `partner` (its handle, pose now and touch
+/// mesh), `travel` its relative travel over the step, `slop` the guard's.
+///
+/// - A pair whose state in `states` bounds its overlap within the slop is [`SlowPair::Within`]
+///   unmeasured.
+/// - Against a fixed or kinematic partner, parry's depth ([`parry_depth`]; a contact at a
+///   positive distance is one of its wrong answers, and such a pair is reconstructed).
+/// - Two dynamic bodies (`bodies`: the mover's and the partner's) are measured by
+///   [`measure_apart`], which keeps the gap of a pair still apart; a fresh impact deeper than
+///   the slop is rewound to its first touch ([`fresh_impact_rewind`], the user's hooks asked in
+///   rapier's pair order `(a, b)`).
+///
+/// The measure is kept in `states`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn measure_slow_pair(
+    world: &PhysicsWorld,
+    (prev_poses, hooks): (&PoseHistory, &dyn PhysicsHooks),
+    states: &mut PairStates,
+    (ch, co, pose, mesh, reach): (
+        ColliderHandle,
+        &rapier3d::geometry::Collider,
+        Pose,
+        &TouchMesh,
+        Real,
+    ),
+    (ph, partner, partner_pose, partner_mesh): (
+        ColliderHandle,
+        &rapier3d::geometry::Collider,
+        Pose,
+        &TouchMesh,
+    ),
+    (a, b): (ColliderHandle, ColliderHandle),
+    bodies: Option<(RigidBodyHandle, RigidBodyHandle)>,
+    (travel, slop): (Real, Real),
+) -> SlowPair {
+    let state = states.get(&(ch, ph));
+    if state.is_some_and(|st| st.bound(&pose, &partner_pose, reach) <= slop) {
+        return SlowPair::Within;
+    }
+    let (measured, apart_axis) = if bodies.is_some() {
+        let kept = state.and_then(|st| st.world_axis(&partner_pose));
+        measure_apart(
+            (partner, &partner_pose, partner_mesh),
+            (co, &pose, mesh),
+            kept,
+            (travel, slop),
+        )
+    } else {
+        let depth = parry_depth((partner, &partner_pose), (co, &pose));
+        (depth.filter(|d| *d >= 0.0), None)
+    };
+    let Some(overlap) = measured else {
+        return SlowPair::Reconstruct;
+    };
+    let state = match apart_axis {
+        Some(n) => PairState::apart_along(overlap, &pose, &partner_pose, n),
+        None => PairState::new(overlap, &pose, &partner_pose),
+    };
+    states.insert((ch, ph), state);
+    if overlap <= slop {
+        return SlowPair::Within;
+    }
+    let Some(bodies) = bodies else {
+        return SlowPair::Reconstruct;
+    };
+    match fresh_impact_rewind(
+        world,
+        (prev_poses, hooks),
+        (a, b),
+        (ph, partner, partner_pose),
+        (ch, co, pose),
+        bodies,
+        overlap,
+    ) {
+        FreshImpact::NoShapeCast => SlowPair::Reconstruct,
+        FreshImpact::Leave => SlowPair::Within,
+        FreshImpact::Rewind(r) => SlowPair::Rewind(r),
+    }
 }
 
 /// Moves the bodies of an [`impact_rewind`] to their poses and velocities.
