@@ -16,13 +16,15 @@
 //! runs are deterministic). `--repeat N` changes the count.
 //!
 //! Run with `cargo run --release --example stress_scenes [-- STEPS] [SCENES] [--csv]
-//! [--repeat N]` (default 300 steps, 5 s).
+//! [--repeat N] [--rewind]` (default 300 steps, 5 s). `--rewind` switches on
+//! `TouchOptions::rewind_dynamic_impacts` on the touch sides.
 
-use rapier_touch::scenes::{run_stress, StressRun, StressScene, StressSide};
+use rapier_touch::scenes::{run_stress_with_options, StressRun, StressScene, StressSide};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let csv = args.iter().any(|a| a == "--csv");
+    let rewind = args.iter().any(|a| a == "--rewind");
     let repeat = args
         .iter()
         .position(|a| a == "--repeat")
@@ -59,7 +61,9 @@ fn main() {
         let mut runs: Vec<Option<StressRun>> = vec![None; sides.len()];
         for _ in 0..repeat {
             for (i, side) in sides.iter().enumerate() {
-                let r = run_stress(scene, *side, steps);
+                let r = run_stress_with_options(scene, *side, steps, 1.0, |o| {
+                    o.rewind_dynamic_impacts = rewind
+                });
                 match &mut runs[i] {
                     Some(best) => best.ms_per_step = best.ms_per_step.min(r.ms_per_step),
                     slot => *slot = Some(r),

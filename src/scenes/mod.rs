@@ -82,8 +82,8 @@ pub use multi_tool::{
 };
 pub use organ::{diverged, Fig7Organ, COMPARED_INTEGRATORS};
 pub use stress::{
-    deepest_solved_overlap, run_stress, run_stress_with_gravity, stress_world, StressRun,
-    StressScene, StressSide, StressWorld,
+    deepest_solved_overlap, run_stress, run_stress_with_gravity, run_stress_with_options,
+    stress_world, StressRun, StressScene, StressSide, StressWorld,
 };
 pub use surgery::{SurgeryScene, SurgeryTool};
 

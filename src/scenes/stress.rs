@@ -9,7 +9,7 @@
 //! at 1000 m/s with CCD enabled). Sizes and counts are reduced; shapes, spacings and
 //! parameters are rapier's.
 
-use crate::hooks::TouchPipeline;
+use crate::hooks::{TouchOptions, TouchPipeline};
 use crate::math::{Real, Rotation, Vector};
 use rapier3d::prelude::*;
 use std::collections::HashSet;
@@ -472,9 +472,22 @@ pub fn run_stress_with_gravity(
     steps: usize,
     gravity_scale: Real,
 ) -> StressRun {
+    run_stress_with_options(scene, side, steps, gravity_scale, |_| {})
+}
+
+/// [`run_stress_with_gravity`] with the touch pipeline's options changed by `options` (unused
+/// by vanilla rapier's side), such as [`TouchOptions::rewind_dynamic_impacts`] switched on.
+pub fn run_stress_with_options(
+    scene: StressScene,
+    side: StressSide,
+    steps: usize,
+    gravity_scale: Real,
+    options: impl FnOnce(&mut TouchOptions),
+) -> StressRun {
     let StressWorld { mut world, floor } = stress_world(scene);
     world.gravity *= gravity_scale;
     let mut touch = side.pipeline(&mut world);
+    options(&mut touch.options);
     let mut max_penetration: Real = 0.0;
     let mut elapsed = std::time::Duration::ZERO;
     // Bodies last seen straight above the floor's surface, and those seen below it after.
