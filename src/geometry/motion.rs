@@ -77,9 +77,9 @@ impl RigidMotion {
     /// First touch of two shapes that both moved over the step, `shape1` along `motion1` and
     /// `shape2` along `motion2`: the fraction of the step at which they first touch (`0` when
     /// they already touched at its start), the contact normal then, out of `shape1` toward
-    /// `shape2`, and the touching point of `shape1` (world frame). `None` when they never touch on the step, when parry has no
-    /// nonlinear shape cast for the shapes (a TriMesh against a TriMesh), or when the answer
-    /// is not finite.
+    /// `shape2`, and the touching point of `shape1` (world frame). `None` when they never
+    /// touch on the step, when parry has no nonlinear shape cast for the shapes (a TriMesh
+    /// against a TriMesh), or when the answer is not finite.
     ///
     /// This is parry's nonlinear shape cast on the shapes themselves, the query rapier's own
     /// CCD asks of two moving bodies: it gives the time and the normal only, not the touching

@@ -12,6 +12,17 @@ pub(super) fn undone_almost_whole(config: &ContactConfiguration) -> bool {
     config.time_of_impact.is_some_and(|t| t < 0.1)
 }
 
+/// The normal of `config`'s first contact patch, turned to the side the moving body came
+/// from (an open mesh's triangle normal may face either side); `None` without a patch.
+pub(super) fn normal_toward_mover(config: &ContactConfiguration) -> Option<Vector> {
+    let p = config.patches.first()?;
+    Some(if p.normal.dot(config.reversing_vector) < 0.0 {
+        -p.normal
+    } else {
+        p.normal
+    })
+}
+
 /// Moves body `bh` (its collider's offset `co_rel`, the collider's pose now `pose_now`) by the
 /// correction `config` against collider `ph` (on body `partner_body`), and removes the
 /// velocity into the partner. Returns the partner's body when it took a share of the way.
@@ -31,11 +42,7 @@ pub(super) fn apply_correction(
     // CCD scene lay frozen on the floor for hundreds of steps, walked back whole every step
     // while gravity grew their speed to 36 m/s.
     let blocked = undone_almost_whole(config);
-    let n = match config.patches.first() {
-        Some(p) if p.normal.dot(r) < 0.0 => Some(-p.normal),
-        Some(p) => Some(p.normal),
-        None => r.try_normalize().filter(|_| blocked),
-    };
+    let n = normal_toward_mover(config).or_else(|| r.try_normalize().filter(|_| blocked));
     // Split the correction by inverse mass when the partner is dynamic too, unless the partner
     // rests on a fixed or kinematic collider: its share would push it into what supports it
     // (seen: a thin dynamic plate pushed 2.25 mm into the floor under it). The moving body then

@@ -29,9 +29,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// so only the partners rapier's narrow phase already pairs it with are looked at (a swept
     /// box query otherwise). A pair whose last measured overlap plus how far the mover moved
     /// relative to its partner since ([`PairState`]) stays under the slop is skipped. Other
-    /// pairs get
-    /// parry's contact query, and a reconstruction only when it finds them deeper than the slop
-    /// (or when parry has no query for the shapes, such as TriMesh against TriMesh).
+    /// pairs get parry's contact query, and a reconstruction only when it finds them deeper
+    /// than the slop (or when parry has no query for the shapes, such as TriMesh against
+    /// TriMesh).
     pub(super) fn guard(&mut self, world: &mut PhysicsWorld) {
         let passes = if self.options.correct_poses {
             self.options.max_passes.max(1)
@@ -130,13 +130,19 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             if relative >= safe_step(&mesh, &pm.mesh) {
                                 return false;
                             }
-                            let had_points = pair.is_some_and(|p| {
-                                p.manifolds().iter().any(|m| !m.points.is_empty())
-                            });
                             if !self.options.rewind_dynamic_impacts
-                                || had_points
                                 || relative + turn <= prediction + slop
                             {
+                                return true;
+                            }
+                            // (A swept partner's pair is looked up only here: most are let go
+                            // above.)
+                            let had_points = pair
+                                .or_else(|| world.narrow_phase.contact_pair(ch, ph))
+                                .is_some_and(|p| {
+                                    p.manifolds().iter().any(|m| !m.points.is_empty())
+                                });
+                            if had_points {
                                 return true;
                             }
                             stayed_apart(
@@ -255,14 +261,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             continue;
                         }
                         // (Most of a pile's swept partners; a slow body's were left out above.)
-                        if view.is_none()
-                            && left_to_rapier(
-                                ph,
-                                partner,
-                                world.narrow_phase.contact_pair(ch, ph),
-                                &self.pair_states,
-                            )
-                        {
+                        if view.is_none() && left_to_rapier(ph, partner, None, &self.pair_states) {
                             continue;
                         }
                         // Only pairs rapier itself would solve (sensors, groups, disabled
@@ -440,7 +439,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     SlowPair::Rewind(rewind) => {
                                         apply_rewind(world, &rewind);
                                         moved_bodies.extend(rewind.map(|(h, _, _)| h));
-                                        self.record_correction(world, (ch, co_rel, bh), ph);
+                                        self.record_correction(world, ch, ph);
                                         moved = true;
                                         break;
                                     }
@@ -602,7 +601,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 (ph, partner_body),
                             ));
                         }
-                        self.record_correction(world, (ch, co_rel, bh), ph);
+                        self.record_correction(world, ch, ph);
                         moved = true;
                         break;
                     }
@@ -616,20 +615,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         self.sync_hook_flags(world);
     }
 
-    /// Counts a correction of collider `ch` (offset `co_rel` on body `bh`) against collider
-    /// `ph`, and records the pair as touching at the poses the correction left.
-    fn record_correction(
-        &mut self,
-        world: &PhysicsWorld,
-        (ch, co_rel, bh): (ColliderHandle, Option<Pose>, RigidBodyHandle),
-        ph: ColliderHandle,
-    ) {
+    /// Counts a correction of collider `ch` against collider `ph`, and records the pair as
+    /// touching at the poses the correction left.
+    fn record_correction(&mut self, world: &PhysicsWorld, ch: ColliderHandle, ph: ColliderHandle) {
         self.corrections += 1;
-        let (Some(partner), Some(body)) = (world.colliders.get(ph), world.bodies.get(bh)) else {
+        let (Some(partner), Some(co)) = (world.colliders.get(ph), world.colliders.get(ch)) else {
             return;
         };
         let partner_pose = collider_pose_now(&world.bodies, partner);
-        let pose = co_rel.map_or(*body.position(), |r| *body.position() * r);
+        let pose = collider_pose_now(&world.bodies, co);
         self.pair_states
             .insert((ch, ph), PairState::new(0.0, &pose, &partner_pose));
     }

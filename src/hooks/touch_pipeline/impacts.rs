@@ -6,6 +6,7 @@
 //! rewinds a pair that got deeper than the slop to its first touch on both bodies' paths
 //! ([`first_touch_of_bodies`], [`impact_rewind`]).
 
+use super::correction::normal_toward_mover;
 use super::pair_view::{overlap_along, parry_depth, parry_overlap_within, PairState, PairStates};
 use super::rapier_contacts::{collider_pose_now, supported};
 use super::*;
@@ -233,12 +234,7 @@ pub(super) fn rewind_from(
     (bh, pb): (RigidBodyHandle, RigidBodyHandle),
     (ch, ph): (ColliderHandle, ColliderHandle),
 ) -> Option<[(RigidBodyHandle, Pose, Vector); 2]> {
-    let (t, patch) = (config.time_of_impact?, config.patches.first()?);
-    let n = if patch.normal.dot(config.reversing_vector) < 0.0 {
-        -patch.normal
-    } else {
-        patch.normal
-    };
+    let (t, n) = (config.time_of_impact?, normal_toward_mover(config)?);
     impact_rewind(world, prev_poses, (t, n), (bh, pb), (ch, ph))
 }
 

@@ -162,11 +162,11 @@ pub(super) fn parry_depth(
 }
 
 /// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
-/// query with a prediction of `margin`: negative for a pair apart (minus its distance, or
-/// minus `margin` when it is farther), `None` when parry has no query for the shapes or the
+/// query with a prediction of `margin`, and the contact's normal (world, out of `partner`)
+/// when parry found one. The overlap is negative for a pair apart (minus its distance, or
+/// minus `margin` when it is farther). `None` when parry has no query for the shapes or the
 /// answer is not finite. (Unlike [`parry_depth`], a positive distance is taken as parry's
 /// answer.)
-/// With the overlap, the contact's normal (world, out of `partner`) when parry found one.
 pub(super) fn parry_overlap_within(
     (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
     (mover, pose): (&rapier3d::geometry::Collider, &Pose),
