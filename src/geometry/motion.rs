@@ -107,6 +107,15 @@ impl RigidMotion {
     /// let a = RigidMotion::new(Pose::translation(-2.0, 0.0, 0.0), Pose::translation(-2.0, 1.0, 0.0), Vector::ZERO);
     /// let b = RigidMotion::new(Pose::translation(2.0, 0.0, 0.0), Pose::translation(2.0, 1.0, 0.0), Vector::ZERO);
     /// assert!(RigidMotion::first_touch_of_two(&Ball::new(1.0), &a, &Ball::new(1.0), &b).is_none());
+    /// // A motion that is not finite has no first touch (no NaN handed on).
+    /// let nan = RigidMotion::new(Pose::translation(f32::NAN, 0.0, 0.0), Pose::IDENTITY, Vector::ZERO);
+    /// assert!(RigidMotion::first_touch_of_two(&Ball::new(1.0), &nan, &Ball::new(1.0), &b).is_none());
+    /// // A degenerate shape, a ball of zero radius (a point), meets the other where its
+    /// // surface sweeps over it: 3 m apart, closing 6 m, half-way.
+    /// let p = RigidMotion::new(Pose::translation(-2.0, 0.0, 0.0), Pose::translation(1.0, 0.0, 0.0), Vector::ZERO);
+    /// let q = RigidMotion::new(Pose::translation(2.0, 0.0, 0.0), Pose::translation(-1.0, 0.0, 0.0), Vector::ZERO);
+    /// let (t, n, _) = RigidMotion::first_touch_of_two(&Ball::new(0.0), &p, &Ball::new(1.0), &q).unwrap();
+    /// assert!((t - 0.5).abs() < 1e-3 && (n - Vector::X).length() < 1e-3);
     /// ```
     pub fn first_touch_of_two(
         shape1: &dyn parry3d::shape::Shape,
