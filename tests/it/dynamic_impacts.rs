@@ -4,7 +4,8 @@
 //! start), and vanilla rapier ends the step with them deep in each other. Through the crate,
 //! in both opt-in modes, they end the step touching (parry's contact query, not the crate's),
 //! with the momentum they had (no gravity: nothing else acts), no more kinetic energy, and no
-//! velocity still closing along the contact normal.
+//! velocity still closing along the contact normal. A pair rapier does not solve (a sensor,
+//! collision or solver groups that exclude it) is left as vanilla leaves it.
 
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
@@ -45,8 +46,24 @@ struct After {
     velocities: (Vector, Vector),
 }
 
+/// What rapier is told about the pair (the second body's collider).
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Pairing {
+    Solid,
+    Sensor,
+    /// Collision groups that exclude the pair.
+    Groups,
+    /// Solver groups that exclude the pair (contacts computed, not solved).
+    SolverGroups,
+}
+
 /// One step of the two bodies, in zero gravity, on `side` with the crate's rewind `rewind`.
 fn one_step(c: Impact, side: Side, rewind: bool) -> After {
+    one_step_paired(c, side, rewind, Pairing::Solid)
+}
+
+/// [`one_step`] with the pair set up as `pairing` says.
+fn one_step_paired(c: Impact, side: Side, rewind: bool, pairing: Pairing) -> After {
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::ZERO;
     let h2 = c.h * c.ratio;
@@ -54,7 +71,17 @@ fn one_step(c: Impact, side: Side, rewind: bool) -> After {
     let dt = world.integration_parameters.dt;
     let speed = c.closing * thin / dt;
     let a = world.insert_body(RigidBodyBuilder::dynamic().linvel(Vector::X * 0.5 * speed));
-    let ca = world.insert_collider(ColliderBuilder::cuboid(c.h, c.h, c.h), Some(a));
+    let (g1, g2) = (
+        InteractionGroups::new(Group::GROUP_1, Group::GROUP_1, InteractionTestMode::And),
+        InteractionGroups::new(Group::GROUP_2, Group::GROUP_2, InteractionTestMode::And),
+    );
+    let first = ColliderBuilder::cuboid(c.h, c.h, c.h);
+    let first = match pairing {
+        Pairing::Groups => first.collision_groups(g1),
+        Pairing::SolverGroups => first.solver_groups(g1),
+        _ => first,
+    };
+    let ca = world.insert_collider(first, Some(a));
     let b = world.insert_body(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(c.h + h2 + c.gap * thin, c.offset * c.h, 0.0))
@@ -65,6 +92,12 @@ fn one_step(c: Impact, side: Side, rewind: bool) -> After {
         ColliderBuilder::ball(h2)
     } else {
         ColliderBuilder::cuboid(h2, h2, h2)
+    };
+    let shape = match pairing {
+        Pairing::Solid => shape,
+        Pairing::Sensor => shape.sensor(true),
+        Pairing::Groups => shape.collision_groups(g2),
+        Pairing::SolverGroups => shape.solver_groups(g2),
     };
     let cb = world.insert_collider(shape.density(c.density_ratio), Some(b));
     let mut touch = TouchPipeline::default();
@@ -210,5 +243,34 @@ fn with_the_rewind_off_a_fresh_impact_is_left_as_vanilla_leaves_it() {
             "{side:?}: {off} m, vanilla {vanilla} m"
         );
         assert!(one_step(c, side, true).depth < 1e-3, "{side:?}");
+    }
+}
+
+/// rapier's collision semantics hold for the rewind: a sensor, collision groups and solver
+/// groups that exclude the pair let the two bodies pass into each other as vanilla rapier
+/// does, in both modes.
+#[test]
+fn a_pair_rapier_does_not_solve_is_not_rewound() {
+    let c = Impact {
+        h: 0.5,
+        ratio: 1.0,
+        ball: false,
+        density_ratio: 1.0,
+        gap: 0.1,
+        closing: 0.6,
+        offset: 0.1,
+        spin: 0.0,
+    };
+    for pairing in [Pairing::Sensor, Pairing::Groups, Pairing::SolverGroups] {
+        let vanilla = one_step_paired(c, Side::Rapier, true, pairing).depth;
+        assert!(vanilla > 0.4, "{pairing:?}: vanilla {vanilla} m");
+        for side in [Side::Hooks, Side::Tracked] {
+            let r = one_step_paired(c, side, true, pairing);
+            assert!(
+                (r.depth - vanilla).abs() < 0.01 * vanilla,
+                "{pairing:?} {side:?}: {} m, vanilla {vanilla} m",
+                r.depth
+            );
+        }
     }
 }
