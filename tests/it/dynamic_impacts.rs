@@ -221,19 +221,22 @@ proptest! {
     }
 }
 
+/// Two 1 m boxes a tenth of their size apart, closing by 60 % of it, slightly offset.
+const HEAD_ON: Impact = Impact {
+    h: 0.5,
+    ratio: 1.0,
+    ball: false,
+    density_ratio: 1.0,
+    gap: 0.1,
+    closing: 0.6,
+    offset: 0.1,
+    spin: 0.0,
+};
+
 /// The option off leaves such a pair to rapier, as vanilla does.
 #[test]
 fn with_the_rewind_off_a_fresh_impact_is_left_as_vanilla_leaves_it() {
-    let c = Impact {
-        h: 0.5,
-        ratio: 1.0,
-        ball: false,
-        density_ratio: 1.0,
-        gap: 0.1,
-        closing: 0.6,
-        offset: 0.1,
-        spin: 0.0,
-    };
+    let c = HEAD_ON;
     let vanilla = one_step(c, Side::Rapier, true).depth;
     assert!(vanilla > 0.4, "vanilla {vanilla} m");
     for side in [Side::Hooks, Side::Tracked] {
@@ -251,16 +254,7 @@ fn with_the_rewind_off_a_fresh_impact_is_left_as_vanilla_leaves_it() {
 /// does, in both modes.
 #[test]
 fn a_pair_rapier_does_not_solve_is_not_rewound() {
-    let c = Impact {
-        h: 0.5,
-        ratio: 1.0,
-        ball: false,
-        density_ratio: 1.0,
-        gap: 0.1,
-        closing: 0.6,
-        offset: 0.1,
-        spin: 0.0,
-    };
+    let c = HEAD_ON;
     for pairing in [Pairing::Sensor, Pairing::Groups, Pairing::SolverGroups] {
         let vanilla = one_step_paired(c, Side::Rapier, true, pairing).depth;
         assert!(vanilla > 0.4, "{pairing:?}: vanilla {vanilla} m");
