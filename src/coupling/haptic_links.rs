@@ -178,8 +178,14 @@ impl SurfaceSet {
             };
             let patch = if force == Vector::ZERO {
                 patch_near(self, world, &shape, &pose)
-            } else {
+            } else if held_vertices.is_empty() {
                 Vec::new()
+            } else {
+                capture_patch(
+                    patch_near(self, world, &shape, &pose),
+                    &held_vertices,
+                    &shape,
+                )
             };
             let model = ServoModel {
                 sequence: 0,
@@ -305,6 +311,33 @@ fn held_vertices(
         }
     }
     out
+}
+
+/// The vertices a smooth tool that holds a few (`held`) may capture before the next world
+/// update: `patch` less the held ones, each resisting with the mean of the held vertices'
+/// stiffness shares (the contact's own secant, read where the tool already presses; the
+/// first-touch estimate where no held vertex has one). Without them a capsule dragged over a
+/// coarse stiff plate met the next vertex only at the world update: the force jumped by up to
+/// 2.3 N of a 5 N press, the proxy was thrown back, let the vertex go and came on again.
+fn capture_patch(
+    mut patch: Vec<PatchVertex>,
+    held: &[HeldVertex],
+    shape: &SharedShape,
+) -> Vec<PatchVertex> {
+    let size = shape.compute_local_aabb().half_extents().max_element();
+    patch.retain(|p| {
+        held.iter()
+            .all(|h| (h.position - p.position).length() > 1e-4 * size)
+    });
+    let shares = held.iter().map(|h| h.stiffness).filter(|k| *k > 0.0);
+    let (sum, count) = shares.fold((0.0, 0), |(s, n), k| (s + k, n + 1));
+    if count > 0 {
+        let mean = sum / count as Real;
+        for p in &mut patch {
+            p.stiffness = mean;
+        }
+    }
+    patch
 }
 
 /// The largest first-touch stiffness of the surface vertices on or in the tool at `pose` (those

@@ -54,7 +54,10 @@ pub struct HeldVertex {
 ///   on a ball's side slides round it as the ball slides past, its force turning and easing
 ///   off: a stiffness that is not positive and that no symmetric positive matrix holds (a
 ///   capsule dragged over a coarse stiff plate: the linear model alone got the force's change
-///   at right angles to the true one);
+///   at right angles to the true one). A [`PatchVertex`] the tool reaches meanwhile (one it
+///   did not hold at the world step) pushes as at a first touch, from zero at the tool's
+///   surface, so a vertex captured between world updates does not arrive as a jump at the
+///   next one;
 /// - out of contact: the deepest [`PatchVertex`] the tool's shape contains at `x` (turned as at
 ///   the world step) pushes the tool out with its stiffness times its depth. One point, not a
 ///   sum over the vertices inside: a membrane's stiffness under a tool does not grow with the
@@ -97,7 +100,9 @@ pub struct ServoModel {
     pub grasping: bool,
     /// The tool's shape, for contacts that start between world steps.
     pub shape: Option<SharedShape>,
-    /// Surface vertices near the tool, not in contact (empty while in contact).
+    /// Surface vertices near the tool that it did not touch at the world step: every one out
+    /// of contact; in contact, those near a smooth tool holding a few vertices (`held` not
+    /// empty), and none otherwise.
     pub patch: Vec<PatchVertex>,
     /// The surface vertices a smooth tool holds (empty for other tools, and out of contact).
     pub held: Vec<HeldVertex>,
@@ -211,9 +216,16 @@ impl ServoModel {
             };
             f += v.normal * v.load - n * load;
         }
+        // A vertex the tool reaches between world steps pushes as a first touch does, from
+        // zero at the tool's surface: the deepest one only, as out of contact.
+        let mut captured = Matrix::ZERO;
+        if let Some((n, depth, k)) = deepest_inside(shape, &pose, &self.patch) {
+            f += n * (k * depth);
+            captured = outer(n, n) * k;
+        }
         (
             f - (self.stiffness - carried) * (x - self.tool_pose.translation),
-            self.stiffness,
+            self.stiffness + captured,
         )
     }
 
@@ -257,6 +269,9 @@ fn deepest_inside(
     pose: &Pose,
     patch: &[PatchVertex],
 ) -> Option<(Vector, Real, Real)> {
+    if patch.is_empty() {
+        return None;
+    }
     let sphere = shape.compute_local_bounding_sphere();
     let (centre, r2) = (
         pose.transform_point(sphere.center),

@@ -185,7 +185,7 @@ fn the_servo_model_agrees_with_each_full_surface_update() {
             2,
             SharedShape::capsule_y(0.02, 0.02),
             0.015,
-            0.9,
+            0.95,
         ),
     ];
     for Case {

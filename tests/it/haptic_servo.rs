@@ -193,6 +193,60 @@ fn a_vertex_held_on_a_ball_pushes_from_its_anchor_as_the_ball_slides_and_presses
     assert!(broken.force_at(Vector::new(0.01, 0.0, 0.0)).is_finite());
 }
 
+/// A ball holding one vertex under it, slid toward a free vertex of the last world step (in
+/// the model's patch): the free vertex adds nothing until the ball's surface reaches it, then
+/// `k · depth` along the line from the ball's centre through it (the sphere's geometry, written
+/// here), so the force does not jump where the vertex is captured between world updates.
+#[test]
+fn a_vertex_a_held_ball_reaches_between_updates_pushes_from_its_first_touch() {
+    use rapier_touch::haptics::{HeldVertex, PatchVertex};
+    let (r, load, s, k) = (0.05, 2.0, 400.0, 300.0);
+    let normal = Vector::new(0.0, -1.0, 0.0);
+    let held = Vector::new(0.0, -r, 0.0);
+    // A free vertex ahead and a little below the ball's side.
+    let free = Vector::new(0.06, -0.01, 0.0);
+    let model = ServoModel {
+        sequence: 1,
+        force: Vector::new(0.0, load, 0.0),
+        stiffness: Matrix::from_cols(normal * normal.x, normal * normal.y, normal * normal.z) * s,
+        shape: Some(SharedShape::ball(r)),
+        held: vec![HeldVertex {
+            position: held,
+            load,
+            normal,
+            stiffness: s,
+            depth: load / s,
+        }],
+        patch: vec![PatchVertex {
+            position: free,
+            stiffness: k,
+        }],
+        ..ServoModel::default()
+    };
+    let without = ServoModel {
+        patch: Vec::new(),
+        ..model.clone()
+    };
+    let mut captured = 0;
+    for i in 0..60 {
+        let c = Vector::new(0.03 * i as f32 / 59.0, 0.0, 0.0);
+        let d = c - free;
+        let depth = r - d.length();
+        let expect = if depth > 0.0 {
+            d.normalize() * (k * depth)
+        } else {
+            Vector::ZERO
+        };
+        let added = model.force_at(c) - without.force_at(c);
+        assert!(
+            (added - expect).length() <= 1e-4 * load,
+            "ball at {c}: {added} added against {expect}"
+        );
+        captured += (depth > 0.0) as usize;
+    }
+    assert!(captured > 10 && captured < 50, "{captured}");
+}
+
 #[test]
 fn servo_threads_and_a_busy_world_never_block_tear_or_panic() {
     // Two tools on servo threads at 2 kHz; the world thread steps, refactors the surface's
