@@ -2,7 +2,7 @@
 //! device, finds the proxy in the world's latest [`super::ServoModel`] and renders the
 //! coupling's force. [`Servo::spawn`] runs it on its own thread at a fixed rate.
 
-use super::servo_model::{rest_proxy, MAX_PATCH};
+use super::servo_model::{rest_proxy_from, MAX_PATCH};
 use super::{DeviceSample, HapticDevice, HapticsError, ServoLink, ServoModel, VirtualCoupling};
 use crate::math::{Matrix, Pose, Real, Vector};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -241,7 +241,8 @@ impl<D: HapticDevice> Servo<D> {
         let (model_sequence, model_force) = (self.current.sequence, self.current.force);
         let x = device.translation;
         let (mut proxy, mut surface_force) = if x.is_finite() {
-            rest_proxy(x, self.coupling.stiffness, |x| self.model_at(x))
+            let last = self.last.map(|l| l.proxy);
+            rest_proxy_from(last, x, self.coupling.stiffness, |x| self.model_at(x))
         } else {
             (x, Vector::ZERO)
         };
@@ -257,7 +258,7 @@ impl<D: HapticDevice> Servo<D> {
                 if self.offset_work > self.reserve.max(0.0) || !self.offset_work.is_finite() {
                     self.offset *= OVER_BUDGET_DECAY;
                     (proxy, surface_force) =
-                        rest_proxy(x, self.coupling.stiffness, |x| self.model_at(x));
+                        rest_proxy_from(Some(p), x, self.coupling.stiffness, |x| self.model_at(x));
                 }
             }
         }
