@@ -125,6 +125,40 @@ fn the_proxy_rests_where_the_coupling_and_the_model_balance() {
     assert_eq!(gone.force_at(Vector::new(0.0, -0.02, 0.0)), Vector::ZERO);
 }
 
+/// The push on a ball of radius `r` centred at `c` of a point `p` with stiffness `k`: `k`
+/// times how deep `p` lies inside, along the line from `p` to the centre; and that depth.
+fn ball_push(c: Vector, r: f32, p: Vector, k: f32) -> (Vector, f32) {
+    let d = c - p;
+    let depth = r - d.length();
+    let push = if depth > 0.0 {
+        d.normalize() * (k * depth)
+    } else {
+        Vector::ZERO
+    };
+    (push, depth)
+}
+
+/// The model of a ball of radius `r` at the origin holding the vertex under it with `load`,
+/// all of the contact's stiffness `s` that vertex's normal one.
+fn ball_holding_its_lowest_vertex(r: f32, load: f32, s: f32) -> ServoModel {
+    use rapier_touch::haptics::HeldVertex;
+    let normal = Vector::new(0.0, -1.0, 0.0);
+    ServoModel {
+        sequence: 1,
+        force: Vector::new(0.0, load, 0.0),
+        stiffness: Matrix::from_cols(normal * normal.x, normal * normal.y, normal * normal.z) * s,
+        shape: Some(SharedShape::ball(r)),
+        held: vec![HeldVertex {
+            position: Vector::new(0.0, -r, 0.0),
+            load,
+            normal,
+            stiffness: s,
+            depth: load / s,
+        }],
+        ..ServoModel::default()
+    }
+}
+
 /// A ball of radius r holding one vertex at its bottom with load λ and stiffness s: the model
 /// is a spring of stiffness s from the vertex's anchor, λ/s above the vertex, to the ball's
 /// surface. Slid and pressed anywhere, the force is s (r - |a - c|) along (c - a) / |c - a|
@@ -133,25 +167,10 @@ fn the_proxy_rests_where_the_coupling_and_the_model_balance() {
 /// when the ball lifts off the anchor.
 #[test]
 fn a_vertex_held_on_a_ball_pushes_from_its_anchor_as_the_ball_slides_and_presses() {
-    use rapier_touch::haptics::HeldVertex;
     let (r, load, s) = (0.05, 2.0, 400.0);
     let normal = Vector::new(0.0, -1.0, 0.0);
     let vertex = Vector::new(0.0, -r, 0.0);
-    let model = ServoModel {
-        sequence: 1,
-        force: Vector::new(0.0, load, 0.0),
-        // All of the contact's stiffness is the vertex's normal one.
-        stiffness: Matrix::from_cols(normal * normal.x, normal * normal.y, normal * normal.z) * s,
-        shape: Some(SharedShape::ball(r)),
-        held: vec![HeldVertex {
-            position: vertex,
-            load,
-            normal,
-            stiffness: s,
-            depth: load / s,
-        }],
-        ..ServoModel::default()
-    };
+    let model = ball_holding_its_lowest_vertex(r, load, s);
     let anchor = vertex - normal * (load / s);
     let mut pushed_on = 0;
     for i in 0..40 {
@@ -161,13 +180,7 @@ fn a_vertex_held_on_a_ball_pushes_from_its_anchor_as_the_ball_slides_and_presses
             -0.004 + 0.008 * ((7.0 * t).sin()),
             0.01 * (3.0 * t).cos(),
         );
-        let d = c - anchor;
-        let depth = r - d.length();
-        let expect = if depth > 0.0 {
-            d.normalize() * (s * depth)
-        } else {
-            Vector::ZERO
-        };
+        let (expect, depth) = ball_push(c, r, anchor, s);
         let f = model.force_at(c);
         assert!(
             (f - expect).length() <= 1e-4 * load,
@@ -199,29 +212,16 @@ fn a_vertex_held_on_a_ball_pushes_from_its_anchor_as_the_ball_slides_and_presses
 /// here), so the force does not jump where the vertex is captured between world updates.
 #[test]
 fn a_vertex_a_held_ball_reaches_between_updates_pushes_from_its_first_touch() {
-    use rapier_touch::haptics::{HeldVertex, PatchVertex};
+    use rapier_touch::haptics::PatchVertex;
     let (r, load, s, k) = (0.05, 2.0, 400.0, 300.0);
-    let normal = Vector::new(0.0, -1.0, 0.0);
-    let held = Vector::new(0.0, -r, 0.0);
     // A free vertex ahead and a little below the ball's side.
     let free = Vector::new(0.06, -0.01, 0.0);
     let model = ServoModel {
-        sequence: 1,
-        force: Vector::new(0.0, load, 0.0),
-        stiffness: Matrix::from_cols(normal * normal.x, normal * normal.y, normal * normal.z) * s,
-        shape: Some(SharedShape::ball(r)),
-        held: vec![HeldVertex {
-            position: held,
-            load,
-            normal,
-            stiffness: s,
-            depth: load / s,
-        }],
         patch: vec![PatchVertex {
             position: free,
             stiffness: k,
         }],
-        ..ServoModel::default()
+        ..ball_holding_its_lowest_vertex(r, load, s)
     };
     let without = ServoModel {
         patch: Vec::new(),
@@ -230,13 +230,7 @@ fn a_vertex_a_held_ball_reaches_between_updates_pushes_from_its_first_touch() {
     let mut captured = 0;
     for i in 0..60 {
         let c = Vector::new(0.03 * i as f32 / 59.0, 0.0, 0.0);
-        let d = c - free;
-        let depth = r - d.length();
-        let expect = if depth > 0.0 {
-            d.normalize() * (k * depth)
-        } else {
-            Vector::ZERO
-        };
+        let (expect, depth) = ball_push(c, r, free, k);
         let added = model.force_at(c) - without.force_at(c);
         assert!(
             (added - expect).length() <= 1e-4 * load,
