@@ -186,3 +186,47 @@ proptest! {
         }
     }
 }
+
+/// A recorded step (its poses' bits, from `tests/it/spinning_drop.rs`'s 1 g box under a change
+/// of the rotating path's search): a 0.5 m box tumbling on a 100 m cuboid floor, 0.90 mm into
+/// it when the step began and 1.08 mm at its end, moving mostly along the floor's face. The
+/// convex path's casts (parry's f32 GJK on coordinates divided by the floor's size, where the
+/// overlap is 1e-5) answered the pair apart, and the guard left the box in. Checked on the
+/// geometry written here: the box's lowest corner under the floor's top means penetrating.
+#[test]
+fn a_box_tumbling_a_millimetre_deep_in_a_wide_floor_is_not_answered_apart() {
+    let pose = |b: [u32; 7]| {
+        let f = |i: usize| f32::from_bits(b[i]);
+        Pose::from_parts(
+            Vector::new(f(0), f(1), f(2)),
+            Rotation::from_xyzw(f(3), f(4), f(5), f(6)),
+        )
+    };
+    let floor_pose = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+    let start = pose([
+        3192115913, 1051874072, 3178030876, 3205429806, 3181373285, 3201668509, 1060533296,
+    ]);
+    let end = pose([
+        3192968542, 1051869391, 3178864079, 3205788802, 3154055831, 3201053870, 1060493483,
+    ]);
+    let floor = TouchMesh::from_shape(&Cuboid::new(Vector::new(50.0, 0.5, 50.0))).unwrap();
+    let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.25))).unwrap();
+    let lowest = |p: &Pose| {
+        cube.vertices()
+            .iter()
+            .map(|&v| p.transform_point(v).y)
+            .fold(f32::MAX, f32::min)
+    };
+    assert!(lowest(&start) < -8e-4 && lowest(&end) < -1e-3);
+    let mut r = Reconstructor::default();
+    let c = r
+        .reconstruct(&floor, &floor_pose, &cube, &end, &start)
+        .unwrap();
+    assert_eq!(c.state, TouchState::Penetrating, "{c:?}");
+    let motion = RigidMotion::new(start, end, Vector::ZERO);
+    let c = r
+        .reconstruct_motion(&floor, &floor_pose, &cube, &motion)
+        .unwrap();
+    assert_eq!(c.state, TouchState::Penetrating, "{c:?}");
+    assert!(!c.on_trajectory);
+}
