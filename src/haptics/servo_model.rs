@@ -400,12 +400,14 @@ pub(crate) fn rest_proxy_from(
                 break;
             }
         }
-        (x, f, r.length())
+        let converged = r.length() <= 1e-6 * (f.length() + kc * 1e-6);
+        (x, f, r.length(), converged)
     };
-    let (mut x, mut f, r) = solve(device, f, k);
-    if let Some(p) = start.filter(|p| p.is_finite() && r > 0.0) {
+    let (mut x, mut f, r, converged) = solve(device, f, k);
+    // From the last proxy only where the device's start stopped short (a kink).
+    if let Some(p) = start.filter(|p| p.is_finite() && !converged) {
         let (fp, kp) = model(p);
-        let (xp, fp, rp) = solve(p, fp, kp);
+        let (xp, fp, rp, _) = solve(p, fp, kp);
         if rp < r {
             (x, f) = (xp, fp);
         }
