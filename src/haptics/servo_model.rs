@@ -416,7 +416,7 @@ pub(crate) fn rest_proxy_from(
 }
 
 /// Most halvings of a proxy step that does not reduce the residual.
-const BACKTRACKS: usize = 6;
+const BACKTRACKS: usize = 3;
 
 /// The positive semi-definite part of a symmetric matrix (negative eigenvalues dropped).
 pub(crate) fn positive_part(m: &Matrix) -> Matrix {
