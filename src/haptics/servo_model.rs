@@ -415,7 +415,7 @@ pub(crate) fn rest_proxy_from(
     (x, f)
 }
 
-/// Most halvings of a proxy step that does not reduce the residual.
+/// Tries of a proxy step that does not reduce the residual: the step, then halved twice.
 const BACKTRACKS: usize = 3;
 
 /// The positive semi-definite part of a symmetric matrix (negative eigenvalues dropped).
