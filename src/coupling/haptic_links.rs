@@ -334,15 +334,7 @@ fn capture_patch(
     // The nearest few: the servo scans them at every evaluation of its proxy search (every
     // vertex within a tool size of a ball on the 100,000-node sphere, scanned there, took the
     // tick's p99 from 50 to 180 µs).
-    if patch.len() > MAX_CAPTURE {
-        let c = pose.translation;
-        patch.select_nth_unstable_by(MAX_CAPTURE, |a, b| {
-            (a.position - c)
-                .length_squared()
-                .total_cmp(&(b.position - c).length_squared())
-        });
-        patch.truncate(MAX_CAPTURE);
-    }
+    keep_nearest(&mut patch, pose.translation, MAX_CAPTURE);
     let shares = held.iter().map(|h| h.stiffness).filter(|k| *k > 0.0);
     let (sum, count) = shares.fold((0.0, 0), |(s, n), k| (s + k, n + 1));
     if count > 0 {
@@ -416,16 +408,20 @@ fn patch_near(
             }
         }
     }
-    if patch.len() > MAX_PATCH {
-        let c = pose.translation;
-        patch.select_nth_unstable_by(MAX_PATCH, |a, b| {
+    keep_nearest(&mut patch, pose.translation, MAX_PATCH);
+    patch
+}
+
+/// Keeps the `n` vertices of `patch` nearest `c` (all of them when there are no more).
+fn keep_nearest(patch: &mut Vec<PatchVertex>, c: Vector, n: usize) {
+    if patch.len() > n {
+        patch.select_nth_unstable_by(n, |a, b| {
             (a.position - c)
                 .length_squared()
                 .total_cmp(&(b.position - c).length_squared())
         });
-        patch.truncate(MAX_PATCH);
+        patch.truncate(n);
     }
-    patch
 }
 
 /// The vertices of `s` that may lie in the world box `lo..hi` (its body at `body`): from the
