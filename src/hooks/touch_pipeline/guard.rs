@@ -5,7 +5,8 @@
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
-    parry_depth, push_out, safe_step, within_along, PairState, PairStates, PairView,
+    corner_reach, overlap_along, parry_depth, push_out, safe_step, within_along, PairState,
+    PairStates, PairView,
 };
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
@@ -180,6 +181,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     self.hooks.meshes.get(&ph).is_some_and(|m| m.exact),
                                     partner_turn > 0.0,
                                 );
+                            let rapier = pair.and_then(|p| {
+                                rapier_contact_of(
+                                    p,
+                                    ph,
+                                    (&partner_pose, &partner_prev),
+                                    (&pose_now, &prev_pose),
+                                    slop,
+                                )
+                            });
                             PairView {
                                 partner_pose,
                                 dp,
@@ -193,16 +203,34 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 // a tessellation). Trusted at any travel, rounded hulls sank 36 mm
                                 // into the floor of rapier's convex-hull stress scene, cones
                                 // 139 mm into its CCD scene's.
-                                rapier: pair.and_then(|p| {
-                                    rapier_contact_of(
-                                        p,
-                                        ph,
-                                        (&partner_pose, &partner_prev),
-                                        (&pose_now, &prev_pose),
-                                        slop,
-                                    )
-                                }),
+                                rapier,
                                 trusted: travel <= prediction || (curved_with(ph) && smooth),
+                                corner_reach: match rapier {
+                                    Some(r) if !smooth => {
+                                        let reach = corner_reach(
+                                            &mesh,
+                                            r.deepest_at_start,
+                                            (&pose_now, &prev_pose),
+                                            (&partner_pose, &partner_prev),
+                                            r.normal,
+                                            partner_turn,
+                                        );
+                                        // Shapes with support points: their overlap along
+                                        // rapier's normal bounds the depth too (two support
+                                        // queries).
+                                        if r.depth + reach > slop {
+                                            overlap_along(
+                                                (partner, &partner_pose),
+                                                (co, &pose_now),
+                                                r.normal,
+                                            )
+                                            .map_or(reach, |o| reach.min((o - r.depth).max(0.0)))
+                                        } else {
+                                            reach
+                                        }
+                                    }
+                                    _ => 0.0,
+                                },
                                 partner_dynamic: partner
                                     .parent()
                                     .and_then(|pb| world.bodies.get(pb))
@@ -301,6 +329,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             travel,
                             rapier,
                             trusted,
+                            corner_reach,
                             partner_dynamic,
                         } = view.unwrap_or_else(|| read(ph, partner, rapier_pair));
                         let overlapped = rapier.is_some_and(|r| r.in_contact_at_start);
@@ -330,8 +359,28 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         });
                         if let Some(r) = &resting {
                             // Within the resting slop: rapier's.
-                            if r.depth <= resting_slop {
+                            if r.depth + corner_reach <= resting_slop {
                                 continue;
+                            }
+                            // Only a corner rapier held no point for may be deeper (the pair
+                            // turned): lifted along rapier's normal by the resting slop, a
+                            // pair parry finds apart is no deeper than that (an intersection
+                            // test, cheaper than the push out below; a TriMesh has no
+                            // support points for `corner_reach`'s own bound).
+                            if r.depth <= resting_slop {
+                                let lifted = Pose::from_parts(
+                                    pose_now.translation + r.normal * resting_slop,
+                                    pose_now.rotation,
+                                );
+                                let overlaps = parry3d::query::intersection_test(
+                                    &partner_pose,
+                                    partner.shape(),
+                                    &lifted,
+                                    co.shape(),
+                                );
+                                if overlaps.is_ok_and(|i| !i.intersecting) {
+                                    continue;
+                                }
                             }
                         }
                         let push_out = |out: Vector| {
@@ -355,7 +404,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 // (beyond its prediction distance) when the step began, so it can
                                 // be no deeper than the pair's relative travel.
                                 let bound = match rapier {
-                                    Some(r) if trusted => r.depth,
+                                    Some(r) if trusted => r.depth + corner_reach,
                                     _ => travel,
                                 };
                                 if bound <= slop {
@@ -371,7 +420,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 // that: rapier's own resting overlap (up to a millimetre) is
                                 // deeper than the slop, and 677 of the TriMesh stress scene's
                                 // 911 reconstructions were such pairs, none corrected.
-                                if let Some(r) = rapier.filter(|_| !trusted) {
+                                // So are trusted points a turn may have brought another
+                                // corner past (`corner_reach`).
+                                if let Some(r) = rapier.filter(|_| !trusted || corner_reach > 0.0) {
                                     let lift = if overlapped {
                                         resting_slop.max(slop)
                                     } else {

@@ -71,7 +71,8 @@ impl PairState {
 /// One pair as the guard reads it, before deciding anything: the partner's pose now, its
 /// translation over the step, the pair's relative travel (translation
 /// plus both rotations' arcs), rapier's contact points of the pair and whether they are
-/// trusted at that travel, and whether the partner is dynamic.
+/// trusted at that travel, how much deeper than those points a corner they do not hold may
+/// have come, and whether the partner is dynamic.
 #[derive(Copy, Clone, Debug)]
 pub(super) struct PairView {
     pub partner_pose: Pose,
@@ -79,6 +80,10 @@ pub(super) struct PairView {
     pub travel: Real,
     pub rapier: Option<RapierContact>,
     pub trusted: bool,
+    /// How much deeper than rapier's deepest point, re-read now, another point of the pair
+    /// may be ([`corner_reach`]); zero for shapes that turn no new corner in (a ball, a
+    /// capsule, a polyhedron that did not turn).
+    pub corner_reach: Real,
     pub partner_dynamic: bool,
 }
 
@@ -91,11 +96,55 @@ impl PairView {
         let slop = options.penetration_slop;
         match &self.rapier {
             Some(r) if r.in_contact_at_start => {
-                self.partner_dynamic || (self.trusted && r.depth <= options.resting_slop)
+                self.partner_dynamic
+                    || (self.trusted && r.depth + self.corner_reach <= options.resting_slop)
             }
-            Some(r) => !options.report_touching && self.trusted && r.depth <= slop,
+            Some(r) => {
+                !options.report_touching && self.trusted && r.depth + self.corner_reach <= slop
+            }
             None => !options.report_touching && self.travel <= slop,
         }
+    }
+}
+
+/// How much deeper than rapier's contact points, re-read now, another point of the mover may
+/// have come over the step, for a partner locally flat along rapier's normal `normal` (world,
+/// out of the partner). rapier's manifold of two polyhedra holds the features deepest along
+/// its normal when the step began, and a turn brings other corners down: an L-shaped TriMesh
+/// rocking on a TriMesh floor read 8 µm above it at rapier's points and ended its step with
+/// another corner 1.12 mm in.
+///
+/// In the partner's frame the mover turned from `R0` to `R1`: a mover point `u` got deeper
+/// than the point `a` deepest at the start by `(a - u) · m`, `m = R1ᵀ n - R0ᵀ n` (the
+/// translations cancel). The most is `a · m` less the mover's lowest vertex along `m`, one
+/// support query. A turn about the normal (a box spinning flat on a floor) gives `m = 0`.
+/// The partner's own turn is bounded by twice its arc, `partner_turn` (two of its points lie
+/// at most twice its reach apart).
+pub(super) fn corner_reach(
+    mesh: &TouchMesh,
+    a: Vector,
+    (pose_now, prev_pose): (&Pose, &Pose),
+    (partner_pose, partner_prev): (&Pose, &Pose),
+    normal: Vector,
+    partner_turn: Real,
+) -> Real {
+    let n = partner_pose.rotation.inverse() * normal;
+    let r0 = (partner_prev.inverse() * *prev_pose).rotation;
+    let r1 = (partner_pose.inverse() * *pose_now).rotation;
+    let m = r1.inverse() * n - r0.inverse() * n;
+    let lowest = match mesh.convex_support(-m, 0) {
+        Some(i) => mesh.vertices()[i as usize].dot(m),
+        None => mesh
+            .vertices()
+            .iter()
+            .map(|v| v.dot(m))
+            .fold(Real::INFINITY, Real::min),
+    };
+    let reach = (a.dot(m) - lowest).max(0.0) + 2.0 * partner_turn;
+    if reach.is_finite() {
+        reach
+    } else {
+        Real::INFINITY
     }
 }
 

@@ -122,6 +122,8 @@ pub(super) struct RapierContact {
     pub(super) depth_at_start: Real,
     pub(super) normal: Vector,
     pub(super) in_contact_at_start: bool,
+    /// The point deepest when the step began, on the mover, local to its collider.
+    pub(super) deepest_at_start: Vector,
 }
 
 /// The [`RapierContact`] of `pair`, `None` when rapier's manifolds hold no contact point for
@@ -142,6 +144,7 @@ pub(super) fn rapier_contact_of(
     let mut in_contact_at_start = false;
     let mut depth_at_start: Real = 0.0;
     let mut deepest: Option<(Real, Vector)> = None;
+    let mut deepest_at_start: Option<(Real, Vector)> = None;
     for m in pair.manifolds() {
         if m.points.is_empty() {
             continue;
@@ -159,6 +162,16 @@ pub(super) fn rapier_contact_of(
             let before = (v2.transform_point(p.local_p2) - v1.transform_point(p.local_p1)).dot(m1);
             in_contact_at_start |= before < touch;
             depth_at_start = depth_at_start.max(-before);
+            if deepest_at_start.is_none_or(|(best, _)| -before > best) {
+                let on_mover = if partner_first {
+                    m.subshape_pos2()
+                        .map_or(p.local_p2, |s| s.transform_point(p.local_p2))
+                } else {
+                    m.subshape_pos1()
+                        .map_or(p.local_p1, |s| s.transform_point(p.local_p1))
+                };
+                deepest_at_start = Some((-before, on_mover));
+            }
             let now = (w2.transform_point(p.local_p2) - w1.transform_point(p.local_p1)).dot(n1);
             if deepest.is_none_or(|(best, _)| -now > best) {
                 deepest = Some((-now, n1));
@@ -172,6 +185,7 @@ pub(super) fn rapier_contact_of(
         depth_at_start,
         normal,
         in_contact_at_start,
+        deepest_at_start: deepest_at_start.map_or(Vector::ZERO, |(_, p)| p),
     })
 }
 
