@@ -43,6 +43,20 @@ fn l_prism() -> (Vec<Vector>, Vec<[u32; 3]>) {
     (v.into_iter().map(|p| p - c).collect(), i)
 }
 
+/// The zero-thickness floor: two triangles 100 m wide in the plane `y = 0`, facing up.
+fn thin_trimesh_floor() -> ColliderBuilder {
+    ColliderBuilder::trimesh(
+        vec![
+            Vector::new(-50.0, 0.0, -50.0),
+            Vector::new(50.0, 0.0, -50.0),
+            Vector::new(50.0, 0.0, 50.0),
+            Vector::new(-50.0, 0.0, 50.0),
+        ],
+        vec![[0, 2, 1], [0, 3, 2]],
+    )
+    .unwrap()
+}
+
 /// Drops `mover` (of the given density) from 2 m with vertical speed `speed` and angular
 /// velocity `spin`; returns the deepest any vertex went below `y = 0` after a step, or `None` if
 /// it went through.
@@ -66,16 +80,7 @@ fn drop(
         Floor::Cuboid => {
             ColliderBuilder::cuboid(50.0, 0.5, 50.0).translation(Vector::new(0.0, -0.5, 0.0))
         }
-        Floor::ThinTriMesh => ColliderBuilder::trimesh(
-            vec![
-                Vector::new(-50.0, 0.0, -50.0),
-                Vector::new(50.0, 0.0, -50.0),
-                Vector::new(50.0, 0.0, 50.0),
-                Vector::new(-50.0, 0.0, 50.0),
-            ],
-            vec![[0, 2, 1], [0, 3, 2]],
-        )
-        .unwrap(),
+        Floor::ThinTriMesh => thin_trimesh_floor(),
     };
     let fh = w.insert_collider(floor.active_hooks(flags), None);
     let body = w.insert_body(
@@ -260,17 +265,7 @@ fn a_corner_a_rocking_trimesh_turns_down_is_pushed_back() {
         } else {
             ActiveHooks::empty()
         };
-        let floor = ColliderBuilder::trimesh(
-            vec![
-                Vector::new(-50.0, 0.0, -50.0),
-                Vector::new(50.0, 0.0, -50.0),
-                Vector::new(50.0, 0.0, 50.0),
-                Vector::new(-50.0, 0.0, 50.0),
-            ],
-            vec![[0, 2, 1], [0, 3, 2]],
-        )
-        .unwrap();
-        let fh = w.insert_collider(floor.active_hooks(flags), None);
+        let fh = w.insert_collider(thin_trimesh_floor().active_hooks(flags), None);
         let body = w.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(Pose::from_parts(

@@ -5,8 +5,8 @@
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
-    corner_reach, overlap_along, parry_depth, push_out, safe_step, within_along, PairState,
-    PairStates, PairView,
+    apart_when_lifted, corner_reach, overlap_along, parry_depth, push_out, safe_step, within_along,
+    PairState, PairStates, PairView,
 };
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{
@@ -367,20 +367,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // pair parry finds apart is no deeper than that (an intersection
                             // test, cheaper than the push out below; a TriMesh has no
                             // support points for `corner_reach`'s own bound).
-                            if r.depth <= resting_slop {
-                                let lifted = Pose::from_parts(
-                                    pose_now.translation + r.normal * resting_slop,
-                                    pose_now.rotation,
-                                );
-                                let overlaps = parry3d::query::intersection_test(
-                                    &partner_pose,
-                                    partner.shape(),
-                                    &lifted,
-                                    co.shape(),
-                                );
-                                if overlaps.is_ok_and(|i| !i.intersecting) {
-                                    continue;
-                                }
+                            if r.depth <= resting_slop
+                                && apart_when_lifted(
+                                    (partner, &partner_pose),
+                                    (co, &pose_now),
+                                    r.normal * resting_slop,
+                                )
+                            {
+                                continue;
                             }
                         }
                         let push_out = |out: Vector| {
@@ -454,17 +448,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     {
                                         continue;
                                     }
-                                    let lifted = Pose::from_parts(
-                                        pose_now.translation + r.normal * lift,
-                                        pose_now.rotation,
-                                    );
-                                    let overlaps = parry3d::query::intersection_test(
-                                        &partner_pose,
-                                        partner.shape(),
-                                        &lifted,
-                                        co.shape(),
-                                    );
-                                    if overlaps.is_ok_and(|i| !i.intersecting) {
+                                    if apart_when_lifted(
+                                        (partner, &partner_pose),
+                                        (co, &pose_now),
+                                        r.normal * lift,
+                                    ) {
                                         continue;
                                     }
                                 }

@@ -196,6 +196,19 @@ pub(super) fn overlap_along(
     overlap.is_finite().then_some(overlap)
 }
 
+/// Whether parry's intersection test finds `mover` (at `pose`) apart from `partner` (at
+/// `partner_pose`) once lifted by `lift` (world): then the pair overlaps by no more than
+/// `lift`'s length along its direction. `false` when parry has no test for the shapes.
+pub(super) fn apart_when_lifted(
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (mover, pose): (&rapier3d::geometry::Collider, &Pose),
+    lift: Vector,
+) -> bool {
+    let lifted = Pose::from_parts(pose.translation + lift, pose.rotation);
+    parry3d::query::intersection_test(partner_pose, partner.shape(), &lifted, mover.shape())
+        .is_ok_and(|i| !i.intersecting)
+}
+
 /// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
 /// query with a prediction of 0: 0 for shapes apart (parry answers `None`), minus the
 /// distance of the contact it answers (negative for a positive distance, one of its wrong
