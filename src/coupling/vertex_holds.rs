@@ -6,7 +6,7 @@
 use super::friction::{settle, Contact, Friction, Settled, Sticks};
 use super::tool_shape::contact_margin;
 use crate::geometry::tool_boundary::{
-    distance_outside, exit_along, nearest_on_boundary, outward_normal,
+    distance_outside, exit_along, nearest_on_boundary, outward_normal_toward,
 };
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
@@ -128,8 +128,10 @@ pub(super) fn hold_vertices(
         if !out.is_finite() {
             continue;
         }
-        // The tool's outward normal at the contact point, and the vertex's way back onto it.
-        let n = pose.rotation * outward_normal(shape, local, margin);
+        // The tool's outward normal at the contact point (at an edge or a corner, the face
+        // the vertex's springs push it against), and the vertex's way back onto it.
+        let push = pose.rotation.inverse() * -surface.internal_force(iu);
+        let n = pose.rotation * outward_normal_toward(shape, local, margin, push);
         let moved = out - *p;
         let tool_velocity = material_velocity(local);
         let v = if stuck.is_some() {

@@ -600,3 +600,24 @@ fn a_jaws_face_on_a_few_triangles_rests_without_see_sawing() {
     let reaction = r.set.tool_reaction(r.tool).unwrap();
     assert!(steady(&reaction), "{reaction:?}");
 }
+
+/// A case of the tilted-tools property test (random seed 9014; it failed at this stop's
+/// starting commit): the jaws turned 4.51 rad about the vertical, tilted 0.0036 rad, over
+/// (0.062, 0.125). One jaw held a plate vertex on its bottom edge; the held normal, the
+/// nearest of two faces the vertex lay on, took the side face's at every other substep, so
+/// the vertex slid down along it 0.27 mm a substep (its vertical motion counted as
+/// tangential) and was put back at the next. The force at the step's last substep read
+/// 6.71 N for the pins' 11.16 N (14 N and 6.7-7.6 N in turn from substep to substep). At an
+/// edge the face the vertex's springs push against is now taken: the pins' force, at every
+/// substep.
+#[test]
+fn a_vertex_on_a_jaws_edge_is_held_by_the_face_it_pushes() {
+    let horizontal = Vector::X;
+    let turn =
+        Rotation::from_axis_angle(horizontal, 0.0036305208) * Rotation::from_rotation_y(4.5123277);
+    let r = jaws_pressed(turn, (0.06173612, 0.12480898));
+    check(&r, inside_of(&r), &[], "jaws over (0.062, 0.125)");
+    balances_the_pins(&r, 0.01, "jaws over (0.062, 0.125)");
+    let reaction = r.set.tool_reaction(r.tool).unwrap();
+    assert!(steady(&reaction), "{reaction:?}");
+}

@@ -200,3 +200,56 @@ fn bad_points_give_finite_answers_or_none() {
         }
     }
 }
+
+/// On an edge or a corner of a cuboid, of the same box as a convex hull and of a compound's
+/// box part, the normal is the face most along the preferred direction, and away from them
+/// the nearest face's whatever the preference. Checked on the box's own face normals, at
+/// scales from 0.1 mm to 1 km.
+#[test]
+fn an_edge_point_takes_the_face_it_pushes_against() {
+    use parry3d::shape::{Cuboid, SharedShape};
+    for scale in [1e-4f32, 0.03, 1.0, 1e3] {
+        let h = Vector::new(0.015, 0.03, 0.02) * scale;
+        let corners: Vec<Vector> = (0..8)
+            .map(|c| {
+                let s = |bit: u32, v: f32| if c & bit == 0 { -v } else { v };
+                Vector::new(s(1, h.x), s(2, h.y), s(4, h.z))
+            })
+            .collect();
+        let offset = Pose::from_translation(Vector::new(0.1, 0.2, -0.1) * scale);
+        let shapes: Vec<(SharedShape, Pose)> = vec![
+            (SharedShape::new(Cuboid::new(h)), Pose::IDENTITY),
+            (SharedShape::convex_hull(&corners).unwrap(), Pose::IDENTITY),
+            (
+                SharedShape::compound(vec![(offset, SharedShape::new(Cuboid::new(h)))]),
+                offset,
+            ),
+        ];
+        let margin = 1e-4 * scale;
+        for (shape, at) in &shapes {
+            // The bottom edge along z at +x: the bottom face for a push down, the +x side for
+            // a push along +x; a corner takes the third face for a push along it.
+            let edge = at.transform_point(Vector::new(h.x, -h.y, 0.3 * h.z));
+            let corner = at.transform_point(Vector::new(h.x, -h.y, h.z));
+            let cases = [
+                (edge, -Vector::Y, -Vector::Y),
+                (edge, Vector::new(1.0, -0.2, 0.0), Vector::X),
+                (corner, Vector::new(0.1, 0.2, 1.0), Vector::Z),
+                // Mid-face: the face's own normal, whatever the preference.
+                (
+                    at.transform_point(Vector::new(0.2 * h.x, -h.y, 0.1 * h.z)),
+                    Vector::X,
+                    -Vector::Y,
+                ),
+            ];
+            for (p, prefer, want) in cases {
+                let n = outward_normal_toward(shape.as_ref(), p, margin, prefer);
+                assert!(
+                    (n - want).length() < 1e-5,
+                    "{:?} at scale {scale}: {n} at {p} for {prefer}",
+                    shape.shape_type()
+                );
+            }
+        }
+    }
+}
