@@ -5,7 +5,7 @@
 use super::holding::attached_with_pose;
 use super::surface_set::AttachedSurface;
 use super::surface_set::{CouplingError, SurfaceSet};
-use crate::geometry::tool_boundary::outward_normal;
+use crate::geometry::tool_boundary::outward_normal_toward;
 use crate::haptics::{
     is_smooth, normal_at, outer, positive_part, HeldVertex, PatchVertex, ServoModel, WorldLink,
     MAX_PATCH,
@@ -279,10 +279,12 @@ fn held_vertices(
     let mut out: Vec<HeldVertex> = held
         .iter()
         .filter_map(|&(position, f)| {
-            // A held vertex lies on the tool's boundary: its normal is the shape's there.
+            // A held vertex lies on the tool's boundary: its normal is the shape's there (on
+            // an edge or a corner, the face it pushes against, as the surface's holds take).
             let normal = normal_at(shape, pose, position).or_else(|| {
                 let local = pose.inverse_transform_point(position);
-                let n = pose.rotation * outward_normal(shape, local, 0.0);
+                let push = pose.rotation.inverse() * -f;
+                let n = pose.rotation * outward_normal_toward(shape, local, 0.0, push);
                 n.is_finite().then_some(n)
             })?;
             let load = -f.dot(normal);

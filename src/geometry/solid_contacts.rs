@@ -298,7 +298,11 @@ mod tests {
                             .map(|c| -c.dist)
                     })
                     .fold(Real::NEG_INFINITY, Real::max);
-                assert_eq!(contacts.len(), 1, "scale {scale}, order {order:?}: {contacts:?}");
+                assert_eq!(
+                    contacts.len(),
+                    1,
+                    "scale {scale}, order {order:?}: {contacts:?}"
+                );
                 let c = &contacts[0];
                 assert_eq!(c.count, 2, "{c:?}");
                 assert!(
