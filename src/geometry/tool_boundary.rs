@@ -41,13 +41,7 @@ pub(crate) fn outward_normal(
     }
     // A compound: the normal of the part whose boundary is nearest.
     if let Some(compound) = shape.as_compound() {
-        let nearest = compound.shapes().iter().min_by(|a, b| {
-            let d = |(pose, part): &(Pose, parry3d::shape::SharedShape)| {
-                (part.project_point(pose, local, false).point - local).length()
-            };
-            d(a).total_cmp(&d(b))
-        });
-        if let Some((pose, part)) = nearest {
+        if let Some((pose, part)) = nearest_part(compound, local) {
             let inner = outward_normal(part.as_ref(), pose.inverse_transform_point(local), margin);
             return pose.rotation * inner;
         }
@@ -99,6 +93,19 @@ pub(crate) fn outward_normal(
         .unwrap_or(radial)
 }
 
+/// The part of `compound` whose boundary is nearest `local` (the compound's frame).
+fn nearest_part(
+    compound: &parry3d::shape::Compound,
+    local: Vector,
+) -> Option<&(Pose, parry3d::shape::SharedShape)> {
+    compound.shapes().iter().min_by(|a, b| {
+        let d = |(pose, part): &(Pose, parry3d::shape::SharedShape)| {
+            (part.project_point(pose, local, false).point - local).length()
+        };
+        d(a).total_cmp(&d(b))
+    })
+}
+
 /// [`outward_normal`] for a point on two or more flat faces at once (an edge or a corner of a
 /// cuboid or a convex polyhedron, or of a compound's such part: face planes within `margin` of
 /// the nearest): the one of those faces whose normal is most along `prefer` (shape frame; the
@@ -116,13 +123,7 @@ pub(crate) fn outward_normal_toward(
 ) -> Vector {
     if prefer != Vector::ZERO && prefer.is_finite() {
         if let Some(compound) = shape.as_compound() {
-            let nearest = compound.shapes().iter().min_by(|a, b| {
-                let d = |(pose, part): &(Pose, parry3d::shape::SharedShape)| {
-                    (part.project_point(pose, local, false).point - local).length()
-                };
-                d(a).total_cmp(&d(b))
-            });
-            if let Some((pose, part)) = nearest {
+            if let Some((pose, part)) = nearest_part(compound, local) {
                 let inner = outward_normal_toward(
                     part.as_ref(),
                     pose.inverse_transform_point(local),
