@@ -138,6 +138,9 @@ pub struct TouchMesh {
     vertex_tris: Vec<u32>,
     /// Present when the mesh bounds a convex solid.
     convex: Option<ConvexData>,
+    /// The vertices on the convex hull of the vertices, found on first use
+    /// ([`TouchMesh::hull_vertices`]).
+    hull: std::sync::OnceLock<Vec<u32>>,
     /// Per user vertex, the vertex that stands for it in the triangles (empty: none welded).
     weld: Vec<u32>,
     welded: usize,
@@ -367,6 +370,7 @@ impl TouchMesh {
             vertex_tri_offsets,
             vertex_tris,
             convex,
+            hull: std::sync::OnceLock::new(),
             min_extent: ext.min_element(),
             scale,
             trimesh,

@@ -269,23 +269,28 @@ impl Reconstructor {
     }
 }
 
-/// The most vertices a mesh that is not convex may have for [`Reconstructor::hull_gap`], whose
-/// support points it then finds by a pass over them.
+/// The most vertices the hull of a mesh that is not convex may have for
+/// [`Reconstructor::hull_gap`], whose support points it then finds by a pass over them
+/// ([`TouchMesh::hull_vertices`]).
 const HULL_GAP_VERTICES: usize = 64;
 
 impl Reconstructor {
     /// The distance between the convex hulls of the two meshes' vertices in frame `fr`: a
     /// lower bound of the meshes' own distance (zero where the hulls overlap), by parry's GJK
     /// on coordinates divided by the pair's scale, as [`Reconstructor::convex_cast`]. `None`
-    /// for a mesh that is neither convex nor small (more than 64 vertices), or an answer that
-    /// is not finite.
+    /// for a mesh that is neither convex nor of a small hull (more than 64 of its vertices on
+    /// it, or more than 4096 vertices), or an answer that is not finite.
     pub(in crate::geometry) fn hull_gap(
         &mut self,
         fixed: &TouchMesh,
         moving: &TouchMesh,
         fr: &Frame,
     ) -> Option<f64> {
-        let small = |m: &TouchMesh| m.is_convex() || m.vertices().len() <= HULL_GAP_VERTICES;
+        let small = |m: &TouchMesh| {
+            m.is_convex()
+                || m.hull_vertices()
+                    .is_some_and(|h| h.len() <= HULL_GAP_VERTICES)
+        };
         if !(small(fixed) && small(moving)) {
             return None;
         }
@@ -361,12 +366,14 @@ impl SupportMap for HillClimb<'_> {
         let v = if self.mesh.is_convex() {
             self.mesh.convex_support(dir, self.warm.get()).unwrap_or(0)
         } else {
-            // The hull of a small mesh that is not convex (`Reconstructor::hull_gap`): a pass
-            // over its vertices.
-            let vertices = self.mesh.vertices().iter().enumerate();
-            vertices
-                .max_by(|a, b| a.1.dot(dir).total_cmp(&b.1.dot(dir)))
-                .map_or(0, |(i, _)| i as u32)
+            // The hull of a mesh that is not convex (`Reconstructor::hull_gap`): a pass over
+            // its hull's vertices.
+            let v = self.mesh.vertices();
+            let hull = self.mesh.hull_vertices().unwrap_or(&[]);
+            hull.iter()
+                .copied()
+                .max_by(|a, b| v[*a as usize].dot(dir).total_cmp(&v[*b as usize].dot(dir)))
+                .unwrap_or(0)
         };
         self.warm.set(v);
         self.mesh.vertices()[v as usize] * self.k

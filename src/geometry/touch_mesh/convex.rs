@@ -13,6 +13,10 @@ pub(super) struct ConvexData {
     flat_normal: Vec<Vector>,
 }
 
+/// The most vertices a mesh may have for [`TouchMesh::hull_vertices`] (quickhull and the
+/// pass that takes its points back to the vertices run once per mesh, on first use).
+const HULL_MAX_VERTICES: usize = 4096;
+
 impl TouchMesh {
     /// `true` if the mesh bounds a convex solid: closed, edge-manifold, connected, consistently
     /// oriented, and locally convex at every vertex (each neighbour lies on or below the plane
@@ -39,6 +43,45 @@ impl TouchMesh {
     /// ```
     pub fn is_convex(&self) -> bool {
         self.convex.is_some()
+    }
+
+    /// The vertices on the convex hull of the mesh's vertices (parry's quickhull, each hull
+    /// point taken back to the vertex it came from), found once, on first use, for a mesh of
+    /// at most [`HULL_MAX_VERTICES`] vertices: a support point of the hull is then a pass over
+    /// these alone (a flat mesh has its outline's corners). `None` for a larger mesh; all
+    /// vertices where quickhull fails.
+    pub(crate) fn hull_vertices(&self) -> Option<&[u32]> {
+        let v = self.vertices();
+        if v.len() > HULL_MAX_VERTICES {
+            return None;
+        }
+        let hull = self.hull.get_or_init(|| {
+            let all = || (0..v.len() as u32).collect::<Vec<u32>>();
+            let Ok((points, _)) = parry3d::transformation::try_convex_hull(v) else {
+                return all();
+            };
+            let mut out: Vec<u32> = points
+                .iter()
+                .filter_map(|p| {
+                    v.iter()
+                        .enumerate()
+                        .min_by(|a, b| {
+                            (*a.1 - *p)
+                                .length_squared()
+                                .total_cmp(&(*b.1 - *p).length_squared())
+                        })
+                        .map(|(i, _)| i as u32)
+                })
+                .collect();
+            out.sort_unstable();
+            out.dedup();
+            if out.is_empty() {
+                all()
+            } else {
+                out
+            }
+        });
+        Some(hull)
     }
 
     /// Strict hill climbing over the vertex graph from `start`: moves to a neighbour farther
@@ -348,5 +391,101 @@ mod tests {
                 assert!(m.vertices()[s as usize].dot(d) >= best(d) - 1e-6);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod hull_tests {
+    use super::*;
+
+    /// The hull of a mesh that is not convex: a box with a notch cut into its top, its faces
+    /// split into a grid (hundreds of vertices), has exactly the box's eight corners on its
+    /// hull; the support point of those alone matches a pass over every vertex in any
+    /// direction. A flat grid has its four corners.
+    #[test]
+    fn a_notched_box_of_many_vertices_has_its_corners_for_hull() {
+        // A 2 × 1 × 1 box's surface sampled on a 9 × 9 grid per face, with the top face's
+        // inner grid points pushed down (a notch): not convex.
+        let n = 8;
+        let mut v: Vec<Vector> = Vec::new();
+        let mut idx: Vec<[u32; 3]> = Vec::new();
+        let h = Vector::new(1.0, 0.5, 0.5);
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let base = v.len() as u32;
+                for i in 0..=n {
+                    for j in 0..=n {
+                        let (a, b) = (
+                            i as f32 / n as f32 * 2.0 - 1.0,
+                            j as f32 / n as f32 * 2.0 - 1.0,
+                        );
+                        let mut p = match axis {
+                            0 => Vector::new(sign, a, b),
+                            1 => Vector::new(a, sign, b),
+                            _ => Vector::new(a, b, sign),
+                        } * h;
+                        let inner = i > 0 && i < n && j > 0 && j < n;
+                        if axis == 1 && sign > 0.0 && inner {
+                            p.y -= 0.2;
+                        }
+                        v.push(p);
+                    }
+                }
+                for i in 0..n {
+                    for j in 0..n {
+                        let q = |i: u32, j: u32| base + i * (n + 1) + j;
+                        idx.push([q(i, j), q(i + 1, j), q(i + 1, j + 1)]);
+                        idx.push([q(i, j), q(i + 1, j + 1), q(i, j + 1)]);
+                    }
+                }
+            }
+        }
+        let mesh = TouchMesh::new(v.clone(), idx).unwrap();
+        assert!(!mesh.is_convex());
+        let hull = mesh.hull_vertices().unwrap();
+        let verts = mesh.vertices();
+        let corners: Vec<Vector> = hull.iter().map(|&i| verts[i as usize]).collect();
+        assert_eq!(corners.len(), 8, "{corners:?}");
+        for c in &corners {
+            assert!((c.abs() - h).length() < 1e-6, "{c}");
+        }
+        for k in 0..100 {
+            let t = k as f32;
+            let dir = Vector::new((t * 0.7).sin(), (t * 1.3).cos(), (t * 0.37).sin());
+            let all = verts.iter().map(|p| p.dot(dir)).fold(f32::MIN, f32::max);
+            let on_hull = corners.iter().map(|p| p.dot(dir)).fold(f32::MIN, f32::max);
+            assert!(
+                (all - on_hull).abs() <= 1e-6 * (1.0 + all.abs()),
+                "{dir}: {all} {on_hull}"
+            );
+        }
+        // A flat grid: its four corners.
+        let grid: Vec<Vector> = (0..25)
+            .map(|k| Vector::new((k % 5) as Real * 0.25, 0.0, (k / 5) as Real * 0.25))
+            .collect();
+        let cells: Vec<[u32; 3]> = (0..16u32)
+            .flat_map(|c| {
+                let q = (c / 4) * 5 + c % 4;
+                [[q, q + 5, q + 6], [q, q + 6, q + 1]]
+            })
+            .collect();
+        let flat = TouchMesh::new(grid, cells).unwrap();
+        let fv = flat.vertices();
+        let mut on: Vec<Vector> = flat
+            .hull_vertices()
+            .unwrap()
+            .iter()
+            .map(|&i| fv[i as usize])
+            .collect();
+        on.sort_by(|a, b| (a.x, a.z).partial_cmp(&(b.x, b.z)).unwrap());
+        assert_eq!(
+            on,
+            vec![
+                Vector::new(0.0, 0.0, 0.0),
+                Vector::new(0.0, 0.0, 1.0),
+                Vector::new(1.0, 0.0, 0.0),
+                Vector::new(1.0, 0.0, 1.0)
+            ]
+        );
     }
 }
