@@ -5,13 +5,11 @@
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
-    apart_when_lifted, corner_reach, overlap_along, parry_depth, push_out, safe_step, within_along,
-    PairState, PairStates, PairView,
+    apart_when_lifted, parry_depth, push_out, safe_step, within_along, Mover, PairState,
+    PairStates, PairView,
 };
 use super::pose_sync::sync_moved_colliders;
-use super::rapier_contacts::{
-    collider_pose_now, other_of, rapier_contact_of, rapier_normal, resting_slop,
-};
+use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting_slop};
 use super::*;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
@@ -79,15 +77,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let curved_with = |ph: ColliderHandle| {
                         !(mesh_exact && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact))
                     };
-                    // A shape turns no new corner into a contact if it has none (a ball, a
-                    // capsule) or did not turn (a polyhedron at rest, a floor). A rounded
-                    // polyhedron, a cylinder or a cone that turns does, as a polyhedron does.
-                    let no_new_corner =
-                        |c: &rapier3d::geometry::Collider, exact: bool, turned: bool| {
-                            c.shape().as_ball().is_some()
-                                || c.shape().as_capsule().is_some()
-                                || (exact && !turned)
-                        };
                     let co_rel = co.position_wrt_parent().copied();
                     let pose_now = co_rel.map_or(*co.position(), |rel| body_pose * rel);
                     let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
@@ -156,86 +145,27 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         };
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
+                    let mover = Mover {
+                        collider: co,
+                        mesh: &mesh,
+                        exact: mesh_exact,
+                        pose: pose_now,
+                        prev_pose,
+                        motion: d,
+                        turn,
+                    };
                     let read =
                         |ph: ColliderHandle,
                          partner: &rapier3d::geometry::Collider,
                          pair: Option<&rapier3d::geometry::ContactPair>| {
-                            let partner_pose = collider_pose_now(&world.bodies, partner);
-                            let partner_prev = previous_collider_pose(
-                                &self.hooks.prev_poses,
-                                partner,
-                                partner_pose,
-                            );
-                            let dp = body_motion(
-                                &self.hooks.prev_poses,
-                                &world.bodies,
-                                partner.parent(),
-                            );
-                            let partner_turn =
-                                partner_prev.rotation.angle_between(partner_pose.rotation)
-                                    * collider_reach(&self.hooks.meshes, ph, partner);
-                            let travel = (d - dp).length() + turn + partner_turn;
-                            let smooth = no_new_corner(co, mesh_exact, turn > 0.0)
-                                && no_new_corner(
-                                    partner,
-                                    self.hooks.meshes.get(&ph).is_some_and(|m| m.exact),
-                                    partner_turn > 0.0,
-                                );
-                            let rapier = pair.and_then(|p| {
-                                rapier_contact_of(
-                                    p,
-                                    ph,
-                                    (&partner_pose, &partner_prev),
-                                    (&pose_now, &prev_pose),
-                                    slop,
-                                )
-                            });
-                            PairView {
-                                partner_pose,
-                                dp,
-                                travel,
-                                // rapier's contact points say whether the pair overlapped when
-                                // the step began. Their depth now is trusted while the pair moved
-                                // less than rapier's prediction distance (they hold every feature
-                                // pair within it at the step's start; a spinning body brings new
-                                // corners in), and for curved shapes that turn no new corner in at
-                                // any travel (rapier's contacts are exact there; the touch mesh is
-                                // a tessellation). Trusted at any travel, rounded hulls sank 36 mm
-                                // into the floor of rapier's convex-hull stress scene, cones
-                                // 139 mm into its CCD scene's.
-                                rapier,
-                                trusted: travel <= prediction || (curved_with(ph) && smooth),
-                                corner_reach: match rapier {
-                                    Some(r) if !smooth => {
-                                        let reach = corner_reach(
-                                            &mesh,
-                                            r.deepest_at_start,
-                                            (&pose_now, &prev_pose),
-                                            (&partner_pose, &partner_prev),
-                                            r.normal,
-                                            partner_turn,
-                                        );
-                                        // Shapes with support points: their overlap along
-                                        // rapier's normal bounds the depth too (two support
-                                        // queries).
-                                        if r.depth + reach > slop {
-                                            overlap_along(
-                                                (partner, &partner_pose),
-                                                (co, &pose_now),
-                                                r.normal,
-                                            )
-                                            .map_or(reach, |o| reach.min((o - r.depth).max(0.0)))
-                                        } else {
-                                            reach
-                                        }
-                                    }
-                                    _ => 0.0,
-                                },
-                                partner_dynamic: partner
-                                    .parent()
-                                    .and_then(|pb| world.bodies.get(pb))
-                                    .is_some_and(|b| b.is_dynamic()),
-                            }
+                            PairView::read(
+                                world,
+                                (&self.hooks.meshes, &self.hooks.prev_poses),
+                                &mover,
+                                (ph, partner, pair),
+                                curved_with(ph),
+                                (slop, prediction),
+                            )
                         };
                     let partners: Vec<(ColliderHandle, Option<PairView>)> =
                         if fast || pass > 0 || is_tool {
