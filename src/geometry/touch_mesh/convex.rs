@@ -392,68 +392,39 @@ mod tests {
             }
         }
     }
-}
 
-#[cfg(test)]
-mod hull_tests {
-    use super::*;
-
-    /// The hull of a mesh that is not convex: a box with a notch cut into its top, its faces
-    /// split into a grid (hundreds of vertices), has exactly the box's eight corners on its
-    /// hull; the support point of those alone matches a pass over every vertex in any
-    /// direction. A flat grid has its four corners.
+    /// The hull of a mesh that is not convex: a subdivided box with the inner vertices of its
+    /// top face pushed down (a notch; hundreds of vertices) has exactly the box's eight
+    /// corners on its hull; the support point of those alone matches a pass over every vertex
+    /// in any direction. A flat grid has its four corners.
     #[test]
     fn a_notched_box_of_many_vertices_has_its_corners_for_hull() {
-        // A 2 × 1 × 1 box's surface sampled on a 9 × 9 grid per face, with the top face's
-        // inner grid points pushed down (a notch): not convex.
-        let n = 8;
-        let mut v: Vec<Vector> = Vec::new();
-        let mut idx: Vec<[u32; 3]> = Vec::new();
         let h = Vector::new(1.0, 0.5, 0.5);
-        for axis in 0..3 {
-            for sign in [-1.0f32, 1.0] {
-                let base = v.len() as u32;
-                for i in 0..=n {
-                    for j in 0..=n {
-                        let (a, b) = (
-                            i as f32 / n as f32 * 2.0 - 1.0,
-                            j as f32 / n as f32 * 2.0 - 1.0,
-                        );
-                        let mut p = match axis {
-                            0 => Vector::new(sign, a, b),
-                            1 => Vector::new(a, sign, b),
-                            _ => Vector::new(a, b, sign),
-                        } * h;
-                        let inner = i > 0 && i < n && j > 0 && j < n;
-                        if axis == 1 && sign > 0.0 && inner {
-                            p.y -= 0.2;
-                        }
-                        v.push(p);
-                    }
-                }
-                for i in 0..n {
-                    for j in 0..n {
-                        let q = |i: u32, j: u32| base + i * (n + 1) + j;
-                        idx.push([q(i, j), q(i + 1, j), q(i + 1, j + 1)]);
-                        idx.push([q(i, j), q(i + 1, j + 1), q(i, j + 1)]);
-                    }
-                }
+        let (mut v, idx) = subdivided_box(h, 8);
+        for p in v.iter_mut() {
+            if p.y == h.y && p.x.abs() < h.x && p.z.abs() < h.z {
+                p.y -= 0.2;
             }
         }
-        let mesh = TouchMesh::new(v.clone(), idx).unwrap();
-        assert!(!mesh.is_convex());
-        let hull = mesh.hull_vertices().unwrap();
-        let verts = mesh.vertices();
-        let corners: Vec<Vector> = hull.iter().map(|&i| verts[i as usize]).collect();
+        let notched = mesh((v, idx));
+        assert!(!notched.is_convex());
+        let verts = notched.vertices();
+        let corners: Vec<Vector> = notched
+            .hull_vertices()
+            .unwrap()
+            .iter()
+            .map(|&i| verts[i as usize])
+            .collect();
         assert_eq!(corners.len(), 8, "{corners:?}");
         for c in &corners {
             assert!((c.abs() - h).length() < 1e-6, "{c}");
         }
-        for k in 0..100 {
-            let t = k as f32;
-            let dir = Vector::new((t * 0.7).sin(), (t * 1.3).cos(), (t * 0.37).sin());
-            let all = verts.iter().map(|p| p.dot(dir)).fold(f32::MIN, f32::max);
-            let on_hull = corners.iter().map(|p| p.dot(dir)).fold(f32::MIN, f32::max);
+        for dir in directions() {
+            let all = verts.iter().map(|p| p.dot(dir)).fold(Real::MIN, Real::max);
+            let on_hull = corners
+                .iter()
+                .map(|p| p.dot(dir))
+                .fold(Real::MIN, Real::max);
             assert!(
                 (all - on_hull).abs() <= 1e-6 * (1.0 + all.abs()),
                 "{dir}: {all} {on_hull}"
@@ -469,7 +440,7 @@ mod hull_tests {
                 [[q, q + 5, q + 6], [q, q + 6, q + 1]]
             })
             .collect();
-        let flat = TouchMesh::new(grid, cells).unwrap();
+        let flat = mesh((grid, cells));
         let fv = flat.vertices();
         let mut on: Vec<Vector> = flat
             .hull_vertices()
