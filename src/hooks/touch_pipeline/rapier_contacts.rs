@@ -142,8 +142,8 @@ pub(super) fn rapier_contact_of(
         ((mover_pose, mover_prev), (partner_pose, partner_prev))
     };
     let mut in_contact_at_start = false;
-    let mut depth_at_start: Real = 0.0;
     let mut deepest: Option<(Real, Vector)> = None;
+    // The deepest overlap when the step began and the mover's point there.
     let mut deepest_at_start: Option<(Real, Vector)> = None;
     for m in pair.manifolds() {
         if m.points.is_empty() {
@@ -161,8 +161,8 @@ pub(super) fn rapier_contact_of(
             // Signed distances along collider 1's normal.
             let before = (v2.transform_point(p.local_p2) - v1.transform_point(p.local_p1)).dot(m1);
             in_contact_at_start |= before < touch;
-            depth_at_start = depth_at_start.max(-before);
-            if deepest_at_start.is_none_or(|(best, _)| -before > best) {
+            // (A NaN best gives way, as `max` ignores NaN.)
+            if deepest_at_start.is_none_or(|(best, _)| -before > best || best.is_nan()) {
                 let on_mover = if partner_first {
                     m.subshape_pos2()
                         .map_or(p.local_p2, |s| s.transform_point(p.local_p2))
@@ -182,7 +182,7 @@ pub(super) fn rapier_contact_of(
     let normal = if partner_first { n1 } else { -n1 }.try_normalize()?;
     depth.is_finite().then_some(RapierContact {
         depth,
-        depth_at_start,
+        depth_at_start: deepest_at_start.map_or(0.0, |(d, _)| d.max(0.0)),
         normal,
         in_contact_at_start,
         deepest_at_start: deepest_at_start.map_or(Vector::ZERO, |(_, p)| p),
