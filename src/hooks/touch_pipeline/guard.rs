@@ -143,8 +143,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 (prediction, slop),
                             )
                         };
-                    // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
-                    // (rapier's default collision types): always query them.
                     let mover = Mover {
                         collider: co,
                         mesh: &mesh,
@@ -154,6 +152,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         motion: d,
                         turn,
                     };
+                    // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
+                    // (rapier's default collision types): always query them.
                     let read =
                         |ph: ColliderHandle,
                          partner: &rapier3d::geometry::Collider,

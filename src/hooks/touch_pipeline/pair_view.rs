@@ -237,13 +237,18 @@ pub(super) fn corner_reach(
     let r0 = (partner_prev.inverse() * *prev_pose).rotation;
     let r1 = (partner_pose.inverse() * *pose_now).rotation;
     let m = r1.inverse() * n - r0.inverse() * n;
+    // The lowest vertex lies on the hull: hill climbing on a convex mesh, a pass over the
+    // hull's vertices on another (over every vertex past the hull's size limit).
+    let v = mesh.vertices();
     let lowest = match mesh.convex_support(-m, 0) {
-        Some(i) => mesh.vertices()[i as usize].dot(m),
-        None => mesh
-            .vertices()
-            .iter()
-            .map(|v| v.dot(m))
-            .fold(Real::INFINITY, Real::min),
+        Some(i) => v[i as usize].dot(m),
+        None => match mesh.hull_vertices() {
+            Some(hull) => hull
+                .iter()
+                .map(|&i| v[i as usize].dot(m))
+                .fold(Real::INFINITY, Real::min),
+            None => v.iter().map(|p| p.dot(m)).fold(Real::INFINITY, Real::min),
+        },
     };
     let reach = (a.dot(m) - lowest).max(0.0) + 2.0 * partner_turn;
     if reach.is_finite() {
