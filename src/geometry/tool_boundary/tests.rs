@@ -253,3 +253,42 @@ fn an_edge_point_takes_the_face_it_pushes_against() {
         }
     }
 }
+
+/// Bad input to the edge rule: a NaN, infinite or zero preference, or a NaN point, answers as
+/// `outward_normal` does (the preference is not used), on a cuboid, a convex hull and a ball.
+#[test]
+fn an_unusable_preference_falls_back_to_the_nearest_face() {
+    use parry3d::shape::{Cuboid, SharedShape};
+    let h = Vector::new(0.015, 0.03, 0.02);
+    let shapes = [
+        SharedShape::new(Cuboid::new(h)),
+        SharedShape::convex_hull(&[
+            Vector::new(-h.x, -h.y, -h.z),
+            Vector::new(h.x, -h.y, -h.z),
+            Vector::new(-h.x, h.y, -h.z),
+            Vector::new(h.x, h.y, -h.z),
+            Vector::new(-h.x, -h.y, h.z),
+            Vector::new(h.x, -h.y, h.z),
+            Vector::new(-h.x, h.y, h.z),
+            Vector::new(h.x, h.y, h.z),
+        ])
+        .unwrap(),
+        SharedShape::ball(0.02),
+    ];
+    let edge = Vector::new(h.x, -h.y, 0.0);
+    for shape in &shapes {
+        for prefer in [Vector::ZERO, Vector::NAN, Vector::splat(Real::INFINITY)] {
+            let n = outward_normal_toward(shape.as_ref(), edge, 1e-6, prefer);
+            let plain = outward_normal(shape.as_ref(), edge, 1e-6);
+            assert_eq!(
+                n.to_array().map(Real::to_bits),
+                plain.to_array().map(Real::to_bits)
+            );
+        }
+        // A NaN point: whatever `outward_normal` answers, and no panic.
+        let p = Vector::NAN;
+        let n = outward_normal_toward(shape.as_ref(), p, 1e-6, -Vector::Y);
+        let plain = outward_normal(shape.as_ref(), p, 1e-6);
+        assert_eq!(n.is_finite(), plain.is_finite(), "{n} against {plain}");
+    }
+}
