@@ -333,6 +333,36 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         self.tracked.insert(collider);
     }
 
+    /// Builds now the touch meshes of every collider guarded (tracked, or with
+    /// `ActiveHooks::MODIFY_SOLVER_CONTACTS`), instead of in the first step that sees them.
+    /// Optional: call it once a scene is loaded, as rapier builds a convex hull's shape when
+    /// its collider is built. A rounded convex hull's mesh takes a few milliseconds to build
+    /// (rapier's convex-hull stress scene: five of them, 15-25 ms in all), a hitch in the
+    /// first frame otherwise. Colliders sharing a shape share one mesh; the ones whose shape
+    /// has no mesh are listed by [`TouchPipeline::refused_colliders`].
+    ///
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::rapier3d::prelude::*;
+    ///
+    /// let mut world = PhysicsWorld::default();
+    /// let points = [
+    ///     Vector::new(0.0, 0.0, 0.0), Vector::new(1.0, 0.0, 0.0),
+    ///     Vector::new(0.0, 1.0, 0.0), Vector::new(0.0, 0.0, 1.0),
+    /// ];
+    /// let body = world.insert_body(RigidBodyBuilder::dynamic());
+    /// let hull = ColliderBuilder::round_convex_hull(&points, 0.05).unwrap();
+    /// let collider = world.insert_collider(hull, Some(body));
+    /// let mut touch = TouchPipeline::default();
+    /// touch.track_collider(collider);
+    /// touch.prepare_meshes(&world.colliders);
+    /// assert_eq!(touch.refused_colliders().count(), 0);
+    /// touch.step(&mut world);
+    /// ```
+    pub fn prepare_meshes(&mut self, colliders: &ColliderSet) {
+        self.refresh_meshes(colliders);
+    }
+
     /// Stops tracking `collider` (see [`TouchPipeline::track_collider`]).
     pub fn untrack_collider(&mut self, collider: ColliderHandle) {
         self.tracked.remove(&collider);
