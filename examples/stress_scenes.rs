@@ -11,15 +11,22 @@
 //! overlap of any pair rapier solves after any step (parry's contact query), dynamic bodies
 //! asleep at the end, bodies through the floor.
 //!
-//! Each scene is run three times, the three sides in turn each time, and the fastest of the
-//! three runs of a side is its ms per step (the other columns are the same in every run: the
-//! runs are deterministic). `--repeat N` changes the count.
+//! Each scene is run three times, and the fastest of the three runs of a side is its ms per
+//! step (the other columns are the same in every run: the runs are deterministic). Within a
+//! run the three sides are stepped in turn, ten steps each (the side that goes first turning
+//! at every block), so that all three are timed over the same stretch of the machine's time:
+//! run one after the other, on a machine whose speed drifts by tens of percent over seconds,
+//! the ratios moved by 0.3-0.8 between runs of the same binary. `--repeat N` changes the
+//! count of runs.
 //!
 //! Run with `cargo run --release --example stress_scenes [-- STEPS] [SCENES] [--csv]
 //! [--repeat N] [--rewind]` (default 300 steps, 5 s). `--rewind` switches on
 //! `TouchOptions::rewind_dynamic_impacts` on the touch sides.
 
-use rapier_touch::scenes::{run_stress_with_options, StressRun, StressScene, StressSide};
+use rapier_touch::scenes::{StressRun, StressRunner, StressScene, StressSide};
+
+/// Steps each side takes before the next side's turn.
+const BLOCK: usize = 10;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -60,10 +67,20 @@ fn main() {
         ];
         let mut runs: Vec<Option<StressRun>> = vec![None; sides.len()];
         for _ in 0..repeat {
-            for (i, side) in sides.iter().enumerate() {
-                let r = run_stress_with_options(scene, *side, steps, 1.0, |o| {
-                    o.rewind_dynamic_impacts = rewind
-                });
+            let mut runners: Vec<StressRunner> = sides
+                .iter()
+                .map(|side| {
+                    StressRunner::new(scene, *side, 1.0, |o| o.rewind_dynamic_impacts = rewind)
+                })
+                .collect();
+            for (block, start) in (0..steps).step_by(BLOCK).enumerate() {
+                for k in 0..runners.len() {
+                    let i = (k + block) % runners.len();
+                    runners[i].step(BLOCK.min(steps - start));
+                }
+            }
+            for (i, runner) in runners.iter().enumerate() {
+                let r = runner.finish();
                 match &mut runs[i] {
                     Some(best) => best.ms_per_step = best.ms_per_step.min(r.ms_per_step),
                     slot => *slot = Some(r),

@@ -63,6 +63,7 @@ mod haptic;
 mod multi_tool;
 mod organ;
 mod stress;
+mod stress_run;
 mod surgery;
 
 pub use ball_on_plate::BallOnPlateScene;
@@ -81,9 +82,10 @@ pub use multi_tool::{
     ToolSpec,
 };
 pub use organ::{diverged, Fig7Organ, COMPARED_INTEGRATORS};
-pub use stress::{
+pub use stress::{stress_world, StressScene, StressSide, StressWorld};
+pub use stress_run::{
     deepest_solved_overlap, run_stress, run_stress_with_gravity, run_stress_with_options,
-    stress_world, StressRun, StressScene, StressSide, StressWorld,
+    StressRun, StressRunner,
 };
 pub use surgery::{SurgeryScene, SurgeryTool};
 

@@ -1,6 +1,6 @@
 //! rapier's own stress-test scenes (its repository's `examples3d/stress_tests/`), scaled down
-//! to a few hundred bodies, and one runner that steps a scene with vanilla rapier or through
-//! the touch pipeline and measures what the `stress_scenes` example reports.
+//! to a few hundred bodies, and the sides that step them (vanilla rapier, the touch pipeline
+//! in either opt-in mode); [`super::stress_run`] runs and measures them.
 //!
 //! The scenes follow rapier's files: `pyramid3.rs` (brick-laid shrunken cubes), `keva3.rs`
 //! (a plank tower), `ragdolls3.rs` (10-body ragdolls with limited joints, contacts off
@@ -9,10 +9,9 @@
 //! at 1000 m/s with CCD enabled). Sizes and counts are reduced; shapes, spacings and
 //! parameters are rapier's.
 
-use crate::hooks::{TouchOptions, TouchPipeline};
-use crate::math::{Real, Rotation, Vector};
+use crate::hooks::TouchPipeline;
+use crate::math::{Real, Vector};
 use rapier3d::prelude::*;
-use std::collections::HashSet;
 
 /// One of rapier's stress-test scenes.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -106,6 +105,10 @@ impl StressSide {
                 StressSide::TouchTracked => touch.track_collider(h),
             }
         }
+        // The touch meshes are built with the scene, as rapier builds its shapes (a rounded
+        // hull's convex hull) when the scene's colliders are built: neither is in the timed
+        // steps.
+        touch.prepare_meshes(&world.colliders);
         touch
     }
 
@@ -436,165 +439,4 @@ fn ccd(world: &mut PhysicsWorld) -> ColliderHandle {
         )
     });
     floor
-}
-
-/// What one run of a stress scene measured.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StressRun {
-    /// Dynamic bodies in the scene.
-    pub bodies: usize,
-    /// Mean wall-clock time of one step (ms), measurements excluded.
-    pub ms_per_step: f64,
-    /// The deepest overlap of any contact pair rapier solves, after any step (m), measured
-    /// with parry's contact query on the colliders' poses.
-    pub max_penetration: Real,
-    /// Dynamic bodies asleep after the last step.
-    pub asleep: usize,
-    /// Dynamic bodies whose centre of mass went through the floor: above its surface at one
-    /// step and below it at a later one, straight over the floor both times (a vertical ray
-    /// cast on the floor's shape). A body flung off the floor's edge that falls past it is not
-    /// counted (the CCD scene throws dozens over the edge).
-    pub through_floor: usize,
-}
-
-/// Steps `scene` `steps` times with `side` and measures it.
-pub fn run_stress(scene: StressScene, side: StressSide, steps: usize) -> StressRun {
-    run_stress_with_gravity(scene, side, steps, 1.0)
-}
-
-/// [`run_stress`] with the scene's gravity scaled by `gravity_scale`. A pile's deepest
-/// overlap is chaotic: scaling gravity by 1 ± 1e-6 moves vanilla rapier's pyramid between
-/// 93.2 and 99.0 mm (its plank tower between 6.43 and 6.48 mm), so a comparison with vanilla
-/// takes its spread over a few such runs.
-pub fn run_stress_with_gravity(
-    scene: StressScene,
-    side: StressSide,
-    steps: usize,
-    gravity_scale: Real,
-) -> StressRun {
-    run_stress_with_options(scene, side, steps, gravity_scale, |_| {})
-}
-
-/// [`run_stress_with_gravity`] with the touch pipeline's options changed by `options` (unused
-/// by vanilla rapier's side), such as [`TouchOptions::rewind_dynamic_impacts`] switched on.
-pub fn run_stress_with_options(
-    scene: StressScene,
-    side: StressSide,
-    steps: usize,
-    gravity_scale: Real,
-    options: impl FnOnce(&mut TouchOptions),
-) -> StressRun {
-    let StressWorld { mut world, floor } = stress_world(scene);
-    world.gravity *= gravity_scale;
-    let mut touch = side.pipeline(&mut world);
-    options(&mut touch.options);
-    let mut max_penetration: Real = 0.0;
-    let mut elapsed = std::time::Duration::ZERO;
-    // Bodies last seen straight above the floor's surface, and those seen below it after.
-    let mut above: HashSet<RigidBodyHandle> = world
-        .bodies
-        .iter()
-        .filter(|(_, b)| b.is_dynamic())
-        .filter(|(_, b)| floor_side(&world, floor, b.center_of_mass()) == Some(true))
-        .map(|(h, _)| h)
-        .collect();
-    let mut through: HashSet<RigidBodyHandle> = HashSet::new();
-    for _ in 0..steps {
-        let t0 = std::time::Instant::now();
-        side.step(&mut world, &mut touch);
-        elapsed += t0.elapsed();
-        max_penetration = max_penetration.max(deepest_solved_overlap(&world));
-        for (h, b) in world.bodies.iter().filter(|(_, b)| b.is_dynamic()) {
-            match floor_side(&world, floor, b.center_of_mass()) {
-                Some(true) => {
-                    above.insert(h);
-                }
-                Some(false) if above.contains(&h) => {
-                    through.insert(h);
-                }
-                _ => {}
-            }
-        }
-    }
-    let dynamic: Vec<&RigidBody> = world
-        .bodies
-        .iter()
-        .map(|(_, b)| b)
-        .filter(|b| b.is_dynamic())
-        .collect();
-    StressRun {
-        bodies: dynamic.len(),
-        ms_per_step: elapsed.as_secs_f64() * 1e3 / steps.max(1) as f64,
-        max_penetration,
-        asleep: dynamic.iter().filter(|b| b.is_sleeping()).count(),
-        through_floor: through.len(),
-    }
-}
-
-/// The deepest overlap among the pairs rapier solves (a manifold with rigid impulses) on the
-/// current collider poses. Against a cuboid floor it is the depth of the other shape's lowest
-/// point (its support point along -y) below the floor's top, over the floor's extent: parry's
-/// contact query is unreliable between a small box and a 200 m ground box (answers near a
-/// metre were seen for a plate lying on it). Other pairs get parry's contact query.
-pub fn deepest_solved_overlap(world: &PhysicsWorld) -> Real {
-    let mut deepest: Real = 0.0;
-    for pair in world.narrow_phase.contact_pairs() {
-        let solved = pair.manifolds().iter().any(|m| {
-            !m.points.is_empty()
-                && m.data
-                    .solver_flags
-                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-        });
-        if !solved {
-            continue;
-        }
-        let (Some(c1), Some(c2)) = (
-            world.colliders.get(pair.collider1),
-            world.colliders.get(pair.collider2),
-        ) else {
-            continue;
-        };
-        let flat_floor = |floor: &Collider, other: &Collider| -> Option<Real> {
-            let cuboid = floor.shape().as_cuboid()?;
-            let fixed = floor
-                .parent()
-                .and_then(|h| world.bodies.get(h))
-                .is_none_or(|b| b.is_fixed());
-            let pose = floor.position();
-            // Only an axis-aligned floor with its top face up.
-            if !fixed || pose.rotation.angle_between(Rotation::IDENTITY) > 1e-6 {
-                return None;
-            }
-            let top = pose.translation.y + cuboid.half_extents.y;
-            let low = other
-                .shape()
-                .as_support_map()?
-                .support_point(other.position(), -Vector::Y);
-            let inside = (low.x - pose.translation.x).abs() <= cuboid.half_extents.x
-                && (low.z - pose.translation.z).abs() <= cuboid.half_extents.z;
-            Some(if inside { top - low.y } else { 0.0 })
-        };
-        let depth = flat_floor(c1, c2)
-            .or_else(|| flat_floor(c2, c1))
-            .or_else(|| {
-                parry3d::query::contact(c1.position(), c1.shape(), c2.position(), c2.shape(), 0.0)
-                    .ok()
-                    .flatten()
-                    .map(|c| -c.dist)
-            });
-        if let Some(d) = depth {
-            deepest = deepest.max(d);
-        }
-    }
-    deepest
-}
-
-/// Where `p` is against the floor's surface straight above or below it: `Some(true)` above,
-/// `Some(false)` below, `None` off the floor's footprint.
-fn floor_side(world: &PhysicsWorld, floor: ColliderHandle, p: Vector) -> Option<bool> {
-    let co = world.colliders.get(floor)?;
-    let top = co.compute_aabb().maxs.y;
-    let ray = parry3d::query::Ray::new(Vector::new(p.x, top + 1.0, p.z), -Vector::Y);
-    let t = co.shape().cast_ray(co.position(), &ray, Real::MAX, false)?;
-    Some(p.y >= top + 1.0 - t)
 }
