@@ -337,7 +337,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// `ActiveHooks::MODIFY_SOLVER_CONTACTS`), instead of in the first step that sees them.
     /// Optional: call it once a scene is loaded, as rapier builds a convex hull's shape when
     /// its collider is built. A rounded convex hull's mesh takes a few milliseconds to build
-    /// (rapier's convex-hull stress scene: five of them, 15-25 ms in all), a hitch in the
+    /// (rapier's convex-hull stress scene: five of them, 13-14 ms in all here), a hitch in the
     /// first frame otherwise. Colliders sharing a shape share one mesh; the ones whose shape
     /// has no mesh are listed by [`TouchPipeline::refused_colliders`].
     ///
