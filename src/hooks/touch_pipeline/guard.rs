@@ -288,13 +288,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             resting_slop(&self.options, world, (ch, extent), partner, d)
                         });
                         if let Some(r) = &resting {
-                            // Within the resting slop, or no deeper than the push back
-                            // below would leave it (the depth it had when the step began, at
-                            // least the resting slop, and a tenth of the slop): rapier's. (The
-                            // push's own measure was asked before this was known: 0.65 times a
-                            // step in the pyramid, 30 µs each, two in three pushing nothing.)
-                            let target = r.depth_at_start.max(resting_slop) + 0.1 * slop;
-                            if r.depth + corner_reach <= target {
+                            // No deeper, by rapier's points and what a turn may have added,
+                            // than the push back below would leave it (the depth it had when
+                            // the step began, at least the resting slop, plus a tenth of the
+                            // slop): rapier's, before the push measures it (the pyramid asked
+                            // for 0.65 such measures a step, 30 µs each, two in three leaving
+                            // the pair as it was).
+                            let left_as_is = r.depth_at_start.max(resting_slop) + 0.1 * slop;
+                            if r.depth + corner_reach <= left_as_is {
                                 continue;
                             }
                             // Only a corner rapier held no point for may be deeper (the pair
