@@ -89,6 +89,19 @@ pub(super) fn apply_correction(
             );
             if p.is_finite() {
                 b.set_position(p, true);
+                // The spin that turned the body into the partner, as far as it still closes at
+                // the contact (a body rolling on its partner closes nothing there and keeps
+                // its spin). Left, it turned the body in again at every step and the guard
+                // turned it back: a cube held so on the TriMesh stress scene's floor spun up
+                // from 2.8 to 7.5 rad/s at one pose while a ball, whose contact with it rapier
+                // solved against that spinning surface, fell 1 m into it (hook side, gravity
+                // × (1 - 1e-5)).
+                let back = (p.rotation * now.rotation.inverse()).to_scaled_axis();
+                if let (Some(axis), Some(n), Some(patch)) =
+                    (back.try_normalize(), n, config.patches.first())
+                {
+                    stop_turn_at(b, patch.center(), n, -axis, partner_v);
+                }
             }
         } else {
             let t = b.translation() + r * share;
@@ -111,4 +124,106 @@ pub(super) fn apply_correction(
         }
     }
     Some(pb)
+}
+
+/// Takes off what body `b`'s spin about `forward` (the axis of the turn the guard just walked
+/// back) closes on a partner moving at `partner_v` along `n` at the point `at`, no more than
+/// that spin: the spin is reduced, never reversed, the velocity kept. A body rolling on its
+/// partner closes nothing at its contact and keeps its spin.
+fn stop_turn_at(
+    b: &mut rapier3d::dynamics::RigidBody,
+    at: Vector,
+    n: Vector,
+    forward: Vector,
+    partner_v: Vector,
+) {
+    let com = b.mass_properties().world_com;
+    let n = if (com - at).dot(n) < 0.0 { -n } else { n };
+    let closing = (b.velocity_at_point(at) - partner_v).dot(n);
+    let w = b.angvel();
+    let spin = w.dot(forward);
+    // How much the point's normal velocity changes per unit of spin about `forward`.
+    let lever = forward.cross(at - com).dot(n);
+    if !(closing < 0.0 && spin > 0.0 && lever < 0.0) {
+        return;
+    }
+    let less = (closing / lever).min(spin);
+    if less.is_finite() && less > 0.0 {
+        b.set_angvel(w - forward * less, true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stop_turn_at;
+    use crate::math::{Real, Vector};
+    use rapier3d::prelude::*;
+
+    /// A body of `shape` at rest height `y`, moving at `v` and spinning at `w`, in a set (its
+    /// mass properties computed).
+    fn body(shape: SharedShape, y: Real, v: Vector, w: Vector) -> (RigidBodySet, RigidBodyHandle) {
+        let mut bodies = RigidBodySet::new();
+        let mut colliders = ColliderSet::new();
+        let h = bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, y, 0.0))
+                .linvel(v)
+                .angvel(w),
+        );
+        colliders.insert_with_parent(ColliderBuilder::new(shape).density(1.0), h, &mut bodies);
+        (bodies, h)
+    }
+
+    /// A cube on a floor (normal +y), turning about z so that its corner at (-1, -1) goes
+    /// down: the spin that closes at the corner goes, exactly as far as the corner stops
+    /// closing (its normal velocity, from the body's own velocity at that point, is zero), and
+    /// the spin is reduced, not reversed. A ball rolling without slipping (its contact point
+    /// still) keeps its spin, and so does a cube whose turn lifts the corner.
+    #[test]
+    fn the_spin_closing_at_the_contact_goes_and_rolling_keeps_its_spin() {
+        let corner = Vector::new(-1.0, 0.0, 0.0);
+        let (mut bodies, h) = body(
+            SharedShape::cuboid(1.0, 1.0, 1.0),
+            1.0,
+            Vector::new(0.3, 0.0, 0.0),
+            Vector::new(0.0, 0.0, 4.0),
+        );
+        let b = &mut bodies[h];
+        assert!(
+            b.velocity_at_point(corner).y < -1.0,
+            "the corner closes before"
+        );
+        stop_turn_at(b, corner, Vector::Y, Vector::Z, Vector::ZERO);
+        let after = b.velocity_at_point(corner).y;
+        assert!(after.abs() < 1e-5, "the corner still closes at {after} m/s");
+        let w = b.angvel();
+        assert!(w.z >= 0.0 && w.z < 4.0, "spin {w:?}");
+        assert_eq!(
+            b.linvel(),
+            Vector::new(0.3, 0.0, 0.0),
+            "the velocity is kept"
+        );
+
+        // The same turn lifting the corner: nothing closes, nothing goes.
+        let (mut bodies, h) = body(
+            SharedShape::cuboid(1.0, 1.0, 1.0),
+            1.0,
+            Vector::ZERO,
+            Vector::new(0.0, 0.0, -4.0),
+        );
+        stop_turn_at(&mut bodies[h], corner, Vector::Y, Vector::Z, Vector::ZERO);
+        assert_eq!(bodies[h].angvel(), Vector::new(0.0, 0.0, -4.0));
+
+        // A ball of radius 1 rolling along x: its contact point at the origin is still.
+        let (mut bodies, h) = body(
+            SharedShape::ball(1.0),
+            1.0,
+            Vector::new(2.0, 0.0, 0.0),
+            Vector::new(0.0, 0.0, -2.0),
+        );
+        let at = Vector::ZERO;
+        assert!(bodies[h].velocity_at_point(at).length() < 1e-6);
+        stop_turn_at(&mut bodies[h], at, Vector::Y, -Vector::Z, Vector::ZERO);
+        assert_eq!(bodies[h].angvel(), Vector::new(0.0, 0.0, -2.0));
+    }
 }
