@@ -287,15 +287,17 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             let extent = mesh.min_extent().min(partner_mesh.min_extent());
                             resting_slop(&self.options, world, (ch, extent), partner, d)
                         });
-                        if let Some(r) = &resting {
+                        // A resting pair is pushed back (below) to the depth it had when the
+                        // step began, at least the resting slop; a push within a tenth of the
+                        // slop of that is not made.
+                        let resting_target = resting.map(|r| r.depth_at_start.max(resting_slop));
+                        let push_tolerance = 0.1 * slop;
+                        if let (Some(r), Some(target)) = (&resting, resting_target) {
                             // No deeper, by rapier's points and what a turn may have added,
-                            // than the push back below would leave it (the depth it had when
-                            // the step began, at least the resting slop, plus a tenth of the
-                            // slop): rapier's, before the push measures it (the pyramid asked
-                            // for 0.65 such measures a step, 30 µs each, two in three leaving
-                            // the pair as it was).
-                            let left_as_is = r.depth_at_start.max(resting_slop) + 0.1 * slop;
-                            if r.depth + corner_reach <= left_as_is {
+                            // than that push would leave it: rapier's, before the push
+                            // measures it (the pyramid asked for 0.65 such measures a step,
+                            // 30 µs each, two in three leaving the pair as it was).
+                            if r.depth + corner_reach <= target + push_tolerance {
                                 continue;
                             }
                             // Only a corner rapier held no point for may be deeper (the pair
@@ -496,8 +498,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // resting slop never gets deeper still, and rapier's steady overlap is
                         // left alone.
                         // A path blocked at its start (above) is pushed back to the slop.
-                        let target = match &resting {
-                            Some(r) => r.depth_at_start.max(resting_slop),
+                        let target = match resting_target {
+                            Some(t) => t,
                             None if blocked_at_start => slop,
                             None => resting_slop,
                         };
@@ -511,7 +513,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let config = match (&along_normal, on_path) {
                             (_, true) => config,
                             (Some(c), false) if c.depth <= deepest_possible && !partner_dynamic => {
-                                if c.depth <= target + 0.1 * slop {
+                                if c.depth <= target + push_tolerance {
                                     continue;
                                 }
                                 let keep = target / c.depth;
