@@ -477,3 +477,63 @@ fn hook_counters_add_up_over_the_run() {
     // The last step alone did less than the run.
     assert!(touch.hooks.counters().rewritten < summed.rewritten);
 }
+
+/// `prepare_meshes` on bad input: an empty world does nothing; a tracked half-space (no mesh)
+/// and a zero-size cuboid are refused, listed by `refused_colliders`, and the step that
+/// follows runs and keeps every pose finite; a hull prepared ahead is the mesh the step uses
+/// (the cube dropped on it is held at its top, by the hull's own query).
+#[test]
+fn prepared_meshes_refuse_bad_shapes_and_serve_the_step() {
+    let mut empty = world();
+    let mut touch = TouchPipeline::default();
+    touch.prepare_meshes(&empty.colliders);
+    assert_eq!(touch.refused_colliders().count(), 0);
+    touch.step(&mut empty);
+
+    let mut w = world();
+    let half_space = w.insert_collider(
+        ColliderBuilder::new(SharedShape::halfspace(Vector::Y)),
+        None,
+    );
+    let dot = w.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(5.0, 1.0, 0.0)));
+    let zero = w.insert_collider(ColliderBuilder::cuboid(0.0, 0.0, 0.0), Some(dot));
+    let points = [
+        Vector::new(-1.0, -0.5, -1.0),
+        Vector::new(1.0, -0.5, -1.0),
+        Vector::new(0.0, -0.5, 1.0),
+        Vector::new(0.0, 0.5, 0.0),
+    ];
+    let hull = w.insert_collider(ColliderBuilder::convex_hull(&points).unwrap(), None);
+    let cube_body = w.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 0.9, 0.0))
+            .linvel(Vector::new(0.0, -30.0, 0.0)),
+    );
+    let cube = w.insert_collider(ColliderBuilder::cuboid(0.1, 0.1, 0.1), Some(cube_body));
+    let mut touch = TouchPipeline::default();
+    for c in [half_space, zero, hull, cube] {
+        touch.track_collider(c);
+    }
+    touch.prepare_meshes(&w.colliders);
+    let mut refused: Vec<ColliderHandle> = touch.refused_colliders().map(|(h, _)| h).collect();
+    refused.sort_by_key(|h| h.into_raw_parts());
+    let mut expected = vec![half_space, zero];
+    expected.sort_by_key(|h| h.into_raw_parts());
+    assert_eq!(refused, expected);
+    for _ in 0..30 {
+        touch.step(&mut w);
+        for (_, b) in w.bodies.iter() {
+            assert!(b.position().is_finite() && b.linvel().is_finite());
+        }
+        let depth = parry3d::query::contact(
+            w.colliders[hull].position(),
+            w.colliders[hull].shape(),
+            w.colliders[cube].position(),
+            w.colliders[cube].shape(),
+            0.0,
+        )
+        .unwrap()
+        .map_or(0.0, |c| -c.dist);
+        assert!(depth <= 1e-3, "the cube {depth} m into the prepared hull");
+    }
+}
