@@ -31,6 +31,7 @@ mod movers;
 mod pair_view;
 pub(crate) mod pose_sync;
 mod rapier_contacts;
+mod swept;
 
 use pair_view::PairStates;
 

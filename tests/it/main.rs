@@ -37,5 +37,6 @@ mod stress_scenes;
 mod surface;
 mod surface_bad_input;
 mod surface_bvh;
+mod swept_partners;
 mod tool_shapes;
 mod toppling;

@@ -2,9 +2,30 @@
 //! share of the way when the partner is dynamic too), and the velocity that still closes on
 //! the partner is taken off, as a plastic impact would.
 
-use super::rapier_contacts::supported;
+use super::pair_view::PairState;
+use super::rapier_contacts::{collider_pose_now, supported};
 use super::*;
 use crate::geometry::ContactConfiguration;
+
+impl<H: PhysicsHooks> TouchPipeline<H> {
+    /// Counts a correction of collider `ch` against collider `ph`, and records the pair as
+    /// touching at the poses the correction left.
+    pub(super) fn record_correction(
+        &mut self,
+        world: &PhysicsWorld,
+        ch: ColliderHandle,
+        ph: ColliderHandle,
+    ) {
+        self.corrections += 1;
+        let (Some(partner), Some(co)) = (world.colliders.get(ph), world.colliders.get(ch)) else {
+            return;
+        };
+        let partner_pose = collider_pose_now(&world.bodies, partner);
+        let pose = collider_pose_now(&world.bodies, co);
+        self.pair_states
+            .insert((ch, ph), PairState::new(0.0, &pose, &partner_pose));
+    }
+}
 
 /// Whether `config` walks its body back almost the whole step (its first touch in the first
 /// tenth of the step): a blocked motion.

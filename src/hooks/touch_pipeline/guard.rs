@@ -5,11 +5,11 @@
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
-    apart_when_lifted, parry_depth, push_out, safe_step, within_along, Mover, PairState,
-    PairStates, PairView,
+    apart_when_lifted, parry_depth, push_out, safe_step, within_along, Mover, PairStates, PairView,
 };
 use super::pose_sync::sync_moved_colliders;
-use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting_slop};
+use super::rapier_contacts::{other_of, rapier_normal, resting_slop};
+use super::swept::{swept_partners, StillPartners};
 use super::*;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
@@ -43,6 +43,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::default();
         let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
         let mut moved_before = 0;
+        let mut still: Option<StillPartners> = None;
+        let rewind = self.options.rewind_dynamic_impacts;
         for pass in 0..passes {
             let mut moved = false;
             // Later passes look again only at the bodies the previous pass moved (a correction
@@ -169,14 +171,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         };
                     let partners: Vec<(ColliderHandle, Option<PairView>)> =
                         if fast || pass > 0 || is_tool {
-                            let swept = co
-                                .shape()
-                                .compute_aabb(&pose_now)
-                                .merged(&co.shape().compute_aabb(&prev_pose))
-                                .loosened(turn);
-                            world
-                                .intersect_aabb_conservative(swept, QueryFilter::default())
-                                .map(|(h, _)| (h, None))
+                            // In the first pass, a dynamic body whose dynamic partners are
+                            // all rapier's needs only the still ones (`swept.rs`).
+                            let still = (pass == 0 && !is_tool && !rewind).then(|| {
+                                &*still.get_or_insert_with(|| {
+                                    StillPartners::collect(world, &self.hooks, prediction + slop)
+                                })
+                            });
+                            let path = (&pose_now, &prev_pose, turn);
+                            swept_partners(world, still, co, path, (d.length(), &mesh))
+                                .map(|h| (h, None))
                                 .collect()
                         } else {
                             // A slow body: only rapier's pairs, and among them only those its
@@ -566,6 +570,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     (ch, ph),
                                 )
                             });
+                        let moved_at = moved_bodies.len();
                         if let Some(rewind) = rewound {
                             apply_rewind(world, &rewind);
                             moved_bodies.extend(rewind.map(|(h, _, _)| h));
@@ -577,6 +582,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 (bh, co_rel, &pose_now),
                                 (ph, partner_body),
                             ));
+                        }
+                        if let Some(s) = still.as_mut() {
+                            s.note_moved(world, &self.hooks.prev_poses, &moved_bodies[moved_at..]);
                         }
                         self.record_correction(world, ch, ph);
                         moved = true;
@@ -590,18 +598,5 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         }
         sync_moved_colliders(world, &mut moved_bodies);
         self.sync_hook_flags(world);
-    }
-
-    /// Counts a correction of collider `ch` against collider `ph`, and records the pair as
-    /// touching at the poses the correction left.
-    fn record_correction(&mut self, world: &PhysicsWorld, ch: ColliderHandle, ph: ColliderHandle) {
-        self.corrections += 1;
-        let (Some(partner), Some(co)) = (world.colliders.get(ph), world.colliders.get(ch)) else {
-            return;
-        };
-        let partner_pose = collider_pose_now(&world.bodies, partner);
-        let pose = collider_pose_now(&world.bodies, co);
-        self.pair_states
-            .insert((ch, ph), PairState::new(0.0, &pose, &partner_pose));
     }
 }
