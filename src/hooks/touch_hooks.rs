@@ -396,15 +396,6 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
                 .map(|c| -c.dist)
                 .fold(0.0, crate::math::Real::max)
         });
-        let travel = relative_travel(
-            &self.meshes,
-            &self.prev_poses,
-            context.bodies,
-            context.colliders,
-            c1,
-            c2,
-        );
-        let deep = depth > self.slop && depth <= self.slop + travel;
         // Two dynamic bodies that moved less than their safe step length relative to each
         // other cannot have passed through each other: their contact is rapier's soft contact,
         // as the step guard leaves it (one contact model for both).
@@ -417,7 +408,20 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
                 .is_some_and(|b| b.is_dynamic())
         };
         let safe = |c: ColliderHandle| self.meshes.get(&c).map_or(0.0, |m| m.mesh.min_extent());
-        let deep = deep && !(dynamic(c1) && dynamic(c2) && travel < safe(c1).min(safe(c2)));
+        // (The travel only for a manifold deeper than the slop: a TriMesh floor's pairs have a
+        // manifold per triangle, and most are shallow.)
+        let deep = depth > self.slop && {
+            let travel = relative_travel(
+                &self.meshes,
+                &self.prev_poses,
+                context.bodies,
+                context.colliders,
+                c1,
+                c2,
+            );
+            depth <= self.slop + travel
+                && !(dynamic(c1) && dynamic(c2) && travel < safe(c1).min(safe(c2)))
+        };
         // rapier's contacts on a curved shape (a ball, a capsule, a rounded shape) are exact
         // where its touch mesh is a tessellation: only pairs of polyhedra are rewritten.
         let exact = |c| self.meshes.get(&c).map(|m| m.exact);
