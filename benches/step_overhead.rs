@@ -7,10 +7,17 @@
 //! - `touch_tracked`: `TouchPipeline::step` with the colliders tracked instead (guard and
 //!   reports, no rapier hooks).
 //!
+//! After criterion's medians (each function timed over its own stretch of the machine's time),
+//! the bench prints the four sides' ratios to vanilla timed interleaved: every side steps
+//! `BLOCK` steps in turn, the first side changing at every round, and a side's time is its
+//! fastest round (on a machine whose speed drifts by tens of percent over seconds, criterion's
+//! sequential medians moved the ratios by ±0.2 between runs).
+//!
 //! Run with `cargo bench --bench step_overhead`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::PhysicsWorld;
 use rapier_touch::scenes::boxes_on_trimesh_floor;
 use std::time::Duration;
 
@@ -53,6 +60,61 @@ fn bench(c: &mut Criterion) {
     }
     g.bench_function("touch_tracked", |b| b.iter(|| touch.step(&mut world)));
     g.finish();
+    interleaved();
+}
+
+/// Steps each side takes per round of the interleaved timing.
+const BLOCK: usize = 20;
+/// Rounds of the interleaved timing.
+const ROUNDS: usize = 30;
+
+/// The four sides timed in turn, `BLOCK` steps each per round; prints each side's fastest
+/// round per step and its ratio to vanilla's.
+fn interleaved() {
+    let names = [
+        "rapier",
+        "rapier_hook_flags",
+        "touch_hooks",
+        "touch_tracked",
+    ];
+    let mut sides: Vec<(PhysicsWorld, Option<TouchPipeline>)> = (0..names.len())
+        .map(|i| {
+            let mut world = boxes_on_trimesh_floor(100, i == 1 || i == 2);
+            let mut touch = (i >= 2).then(TouchPipeline::default);
+            if i == 3 {
+                let handles: Vec<_> = world.colliders.iter().map(|(h, _)| h).collect();
+                for h in handles {
+                    touch.as_mut().unwrap().track_collider(h);
+                }
+            }
+            for _ in 0..60 {
+                match touch.as_mut() {
+                    Some(t) => t.step(&mut world),
+                    None => world.step(),
+                }
+            }
+            (world, touch)
+        })
+        .collect();
+    let mut best = vec![f64::INFINITY; sides.len()];
+    for round in 0..ROUNDS {
+        for k in 0..sides.len() {
+            let i = (k + round) % sides.len();
+            let (world, touch) = &mut sides[i];
+            let t0 = std::time::Instant::now();
+            for _ in 0..BLOCK {
+                match touch.as_mut() {
+                    Some(t) => t.step(world),
+                    None => world.step(),
+                }
+            }
+            best[i] = best[i].min(t0.elapsed().as_secs_f64() / BLOCK as f64);
+        }
+    }
+    println!("interleaved ({ROUNDS} rounds of {BLOCK} steps, fastest round):");
+    for (name, t) in names.iter().zip(&best) {
+        println!("  {name:<18} {:8.1} µs  {:.3}x", t * 1e6, t / best[0]);
+    }
 }
 
 criterion_group!(benches, bench);
