@@ -11,7 +11,7 @@ use super::rigid_holder::{give_impulses, merge_blocks, motion, HolderRow, Holder
 use crate::surface::filter::{Filter, FilterKind};
 use friction::{Grip, SlidingPoint, FRICTION_PASSES, FRICTION_TOLERANCE};
 use glamx::DVec3;
-use rows::{rows, surface_independent, Con, Row, Rows};
+use rows::{rows, surface_independent, targets, Con, Row, Rows};
 
 mod friction;
 mod rows;
@@ -49,6 +49,7 @@ pub(super) fn constrain(
         cons,
         normal_row,
         tangent_rows,
+        known,
     }) = rows(free, free_index, held, held_normal, points)
     else {
         return;
@@ -107,34 +108,13 @@ pub(super) fn constrain(
     };
     // Vertex holds: no change of the held velocity. Point holds: at least their least
     // velocity.
-    let rhs: Vec<f64> = cons
-        .iter()
-        .map(|(da, ea, na, row)| {
-            // The point's velocity along `da` after the step as it stands.
-            let along = || {
-                ea[..*na]
-                    .iter()
-                    .map(|&(k, w)| {
-                        let fi = list[k] as usize;
-                        w * da.dot(vel[free[fi] as usize] + dv[fi])
-                    })
-                    .sum::<f64>()
-            };
-            match *row {
-                Row::Vertex => -ea[..*na]
-                    .iter()
-                    .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
-                    .sum::<f64>(),
-                Row::Normal(pi) => points[pi].normal_target(holders) - along(),
-                Row::Tangent(pi) => {
-                    points[pi]
-                        .carried_target(holders)
-                        .map_or(0.0, |target| da.dot(target))
-                        - along()
-                }
-            }
-        })
-        .collect();
+    let rhs = targets(
+        (&list, &cons, &known),
+        points,
+        holders,
+        (free, held_normal),
+        (vel, dv),
+    );
     // A point hold on a held vertex, or two on the same points, repeat a constraint: a tiny
     // diagonal term keeps the system definite (the least-norm impulses).
     let scale = cons.iter().map(|c| a_entry(c, c)).fold(0.0, f64::max);
@@ -231,11 +211,18 @@ pub(super) fn constrain(
     let mut factor = std::mem::take(&mut memory.scratch.factor);
     // Row `c`'s group (the rows loading the same weighted vertices), and where each group's
     // P-weighted column starts in `q` (filled as the passes need them).
+    // (A normal row with held vertices left out loads fewer than its tangent rows: a group of
+    // its own.)
+    let mut reduced = vec![false; m];
+    for &(c, _, _) in &known {
+        reduced[c] = true;
+    }
     let group = |c: usize| match cons[c].3 {
+        Row::Normal(pi) if reduced[c] => points.len() + h + pi,
         Row::Normal(pi) | Row::Tangent(pi) => pi,
         Row::Vertex => points.len() + cons[c].1[0].0,
     };
-    let mut q_at = vec![usize::MAX; points.len() + h];
+    let mut q_at = vec![usize::MAX; 2 * points.len() + h];
     let mut q: Vec<f64> = Vec::new();
     // Whether each row pushed at the end of its block's last pass: the next pass starts from
     // there (on the six cubes with friction, 2.4 active-set passes a solve instead of 2.9,

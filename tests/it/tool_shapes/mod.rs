@@ -496,3 +496,24 @@ fn a_vertex_on_a_jaws_edge_is_held_by_the_face_it_pushes() {
     let reaction = r.set.tool_reaction(r.tool).unwrap();
     assert!(steady(&reaction), "{reaction:?}");
 }
+
+/// A case of the tilted-tools property test (random seed 6102; it failed at this stop's
+/// starting commit): the jaws turned 1.26 rad about the vertical, untilted, over (0.117,
+/// 0.015). A jaw's bottom edge crosses the surface edge from a vertex the jaw holds to one
+/// 6 cm outside it, 7.6 % of the way: the point, pressed after each substep, held the far
+/// vertex down at the jaw's depth, but in the filtered step its row nearly repeated the held
+/// vertex's and was left out, so the far vertex sprang 0.24 mm up in every substep and was
+/// pushed back after it. Its five free neighbours never came to rest (0.07 N each, held by
+/// nothing, at the end of every step). The held vertex's part of the row is now counted as
+/// known (its hold fixes it), and the row holds the far vertex through the step.
+#[test]
+fn a_jaws_edge_beside_a_held_vertex_holds_the_far_vertex_through_the_step() {
+    let r = jaws_pressed(
+        Rotation::from_rotation_y(1.2642744),
+        (0.11669069, 0.015132333),
+    );
+    check(&r, inside_of(&r), &[], "jaws over (0.117, 0.015)");
+    balances_the_pins(&r, 0.01, "jaws over (0.117, 0.015)");
+    let reaction = r.set.tool_reaction(r.tool).unwrap();
+    assert!(steady(&reaction), "{reaction:?}");
+}

@@ -4,12 +4,17 @@
 
 use super::super::active_set::{give_back, repeated_rows, zeroed, Scratch};
 use super::super::point_hold::PointHold;
+use super::super::rigid_holder::HolderState;
 use super::super::NOT_FREE;
 use glamx::DVec3;
 
 /// A constraint: direction, up to three (slot, weight) entries and how many are used, and
 /// what it holds.
 pub(super) type Con = (DVec3, [(usize, f64); 3], usize, Row);
+
+/// An entry left out of a row because a hold fixes its vertex's velocity along it: row,
+/// vertex, weight.
+pub(super) type Known = (usize, u32, f64);
 
 /// The solve's rows over the free slots `list` they load (sorted), with the normal row of
 /// each point hold and its tangent rows.
@@ -18,6 +23,24 @@ pub(super) struct Rows {
     pub cons: Vec<Con>,
     pub normal_row: Vec<usize>,
     pub tangent_rows: Vec<Option<(usize, usize)>>,
+    /// The entries left out of point holds' normal rows: held vertices whose velocity along
+    /// the row is their holder's ([`held_along`]).
+    pub known: Vec<Known>,
+}
+
+/// Whether a vertex's velocity along `d` after the filtered step is fixed by its hold (so a
+/// point row can count it as known rather than solve for it): a full hold fixes every
+/// direction, a sliding hold its normal, and `d` within about a degree of that normal
+/// (`|d × n| ≤ 0.02`) is taken as along it.
+///
+/// A tool's edge across a surface edge next to a vertex the tool holds puts most of the
+/// point's weight on that vertex: its row repeated the vertex's own within the solve's
+/// tolerance and was left out, so the far vertex, which only the point holds down, sprang
+/// back in every step and was pushed back after it: its free neighbours never came to rest
+/// (a two-jaw tool on a 62.5 mm mesh, a point with 7.6 % of its weight on the far vertex: 0.24
+/// mm up and down each substep, 0.07 N on each of five neighbours at rest).
+pub(super) fn held_along(held: bool, normal: DVec3, d: DVec3) -> bool {
+    held && (normal == DVec3::ZERO || normal.cross(d).length() <= 0.02)
 }
 
 /// The rows of the held vertices (`held`, with `held_normal`: zero for a full hold) and the
@@ -64,17 +87,39 @@ pub(super) fn rows(
             cons.push((n, entry, 1, Row::Vertex));
         }
     }
+    let mut known = Vec::new();
     for (pi, p) in points.iter().enumerate() {
         let mut entry = [(0, 0.0); 3];
         let mut count = 0;
+        // The normal row's entries on vertices that move with the solve, and those a hold
+        // fixes along it.
+        let mut normal_entry = [(0, 0.0); 3];
+        let mut normal_count = 0;
+        let mut fixed = [(0u32, 0.0); 3];
+        let mut fixed_count = 0;
         for (v, w) in p.entries() {
             if let Some(k) = slot(free_index[v as usize]) {
                 entry[count] = (k, w);
                 count += 1;
+                let vi = v as usize;
+                if held_along(held[vi], held_normal[vi], p.normal) {
+                    fixed[fixed_count] = (v, w);
+                    fixed_count += 1;
+                } else {
+                    normal_entry[normal_count] = (k, w);
+                    normal_count += 1;
+                }
             }
         }
         if count > 0 {
-            cons.push((p.normal, entry, count, Row::Normal(pi)));
+            // (A point all on held vertices keeps its whole row: they carry it.)
+            if normal_count > 0 && fixed_count > 0 {
+                let c = cons.len();
+                known.extend(fixed[..fixed_count].iter().map(|&(v, w)| (c, v, w)));
+                cons.push((p.normal, normal_entry, normal_count, Row::Normal(pi)));
+            } else {
+                cons.push((p.normal, entry, count, Row::Normal(pi)));
+            }
             if p.carried.is_some() {
                 let (t1, t2) = p.normal.any_orthonormal_pair();
                 cons.push((t1, entry, count, Row::Tangent(pi)));
@@ -97,7 +142,69 @@ pub(super) fn rows(
         cons,
         normal_row,
         tangent_rows,
+        known,
     })
+}
+
+/// Each row's target, the velocity change along it that the solve's impulses must give
+/// (`vel` before the step, `dv` the step's change as it stands, by free slot): none for a
+/// vertex hold, a point's least velocity for its normal row (less what the held vertices
+/// left out of it keep, [`held_along`]), its holder's velocity for a carried point's tangent
+/// rows.
+pub(super) fn targets(
+    (list, cons, known): (&[u32], &[Con], &[Known]),
+    points: &[PointHold],
+    holders: &[HolderState],
+    (free, held_normal): (&[u32], &[DVec3]),
+    (vel, dv): (&[DVec3], &[DVec3]),
+) -> Vec<f64> {
+    // A normal row's velocity along `da` from the held vertices left out of it: what their
+    // holds keep, along their normals.
+    let known_along = |c: usize, da: DVec3| {
+        known
+            .iter()
+            .filter(|(kc, _, _)| *kc == c)
+            .map(|&(_, v, w)| {
+                let (v, n) = (v as usize, held_normal[v as usize]);
+                let along = if n == DVec3::ZERO {
+                    vel[v]
+                } else {
+                    n * vel[v].dot(n)
+                };
+                w * da.dot(along)
+            })
+            .sum::<f64>()
+    };
+    cons.iter()
+        .enumerate()
+        .map(|(c, (da, ea, na, row))| {
+            // The point's velocity along `da` after the step as it stands.
+            let along = || {
+                ea[..*na]
+                    .iter()
+                    .map(|&(k, w)| {
+                        let fi = list[k] as usize;
+                        w * da.dot(vel[free[fi] as usize] + dv[fi])
+                    })
+                    .sum::<f64>()
+            };
+            match *row {
+                Row::Vertex => -ea[..*na]
+                    .iter()
+                    .map(|&(k, w)| w * da.dot(dv[list[k] as usize]))
+                    .sum::<f64>(),
+                Row::Normal(pi) => {
+                    points[pi].normal_target(holders) - along() - known_along(c, *da)
+                }
+                Row::Tangent(pi) => {
+                    points[pi]
+                        .carried_target(holders)
+                        .map_or(0.0, |target| da.dot(target))
+                        - along()
+                }
+            }
+        })
+        .collect()
 }
 
 /// What a row of the filtered step's constraint solve holds.
