@@ -419,7 +419,12 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     SlowPair::Rewind(_) if !self.options.correct_poses => continue,
                                     SlowPair::Rewind(rewind) => {
                                         apply_rewind(world, &rewind);
+                                        let moved_at = moved_bodies.len();
                                         moved_bodies.extend(rewind.map(|(h, _, _)| h));
+                                        if let Some(s) = still.as_mut() {
+                                            let prev = &self.hooks.prev_poses;
+                                            s.note_moved(world, prev, &moved_bodies[moved_at..]);
+                                        }
                                         self.record_correction(world, ch, ph);
                                         moved = true;
                                         break;
