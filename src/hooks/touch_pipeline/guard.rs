@@ -174,9 +174,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // In the first pass, a dynamic body whose dynamic partners are
                             // all rapier's needs only the still ones (`swept.rs`).
                             let still = (pass == 0 && !is_tool && !rewind).then(|| {
-                                &*still.get_or_insert_with(|| {
+                                let s = still.get_or_insert_with(|| {
                                     StillPartners::collect(world, &self.hooks, prediction + slop)
-                                })
+                                });
+                                s.take_in_moved(world, &self.hooks.prev_poses, &moved_bodies);
+                                &*s
                             });
                             let path = (&pose_now, &prev_pose, turn);
                             swept_partners(world, still, co, path, (d.length(), &mesh))
@@ -419,12 +421,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     SlowPair::Rewind(_) if !self.options.correct_poses => continue,
                                     SlowPair::Rewind(rewind) => {
                                         apply_rewind(world, &rewind);
-                                        let moved_at = moved_bodies.len();
                                         moved_bodies.extend(rewind.map(|(h, _, _)| h));
-                                        if let Some(s) = still.as_mut() {
-                                            let prev = &self.hooks.prev_poses;
-                                            s.note_moved(world, prev, &moved_bodies[moved_at..]);
-                                        }
                                         self.record_correction(world, ch, ph);
                                         moved = true;
                                         break;
@@ -575,7 +572,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     (ch, ph),
                                 )
                             });
-                        let moved_at = moved_bodies.len();
                         if let Some(rewind) = rewound {
                             apply_rewind(world, &rewind);
                             moved_bodies.extend(rewind.map(|(h, _, _)| h));
@@ -587,9 +583,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 (bh, co_rel, &pose_now),
                                 (ph, partner_body),
                             ));
-                        }
-                        if let Some(s) = still.as_mut() {
-                            s.note_moved(world, &self.hooks.prev_poses, &moved_bodies[moved_at..]);
                         }
                         self.record_correction(world, ch, ph);
                         moved = true;

@@ -27,6 +27,8 @@ pub(super) struct StillPartners {
     max_dynamic_motion: Real,
     /// The smallest positive `min_extent` of a touch mesh on a dynamic body.
     min_dynamic_extent: Real,
+    /// How many of the guard's moved bodies `max_dynamic_motion` has taken in.
+    seen: usize,
 }
 
 impl StillPartners {
@@ -78,6 +80,7 @@ impl StillPartners {
             boxes,
             max_dynamic_motion,
             min_dynamic_extent,
+            seen: 0,
         }
     }
 
@@ -107,20 +110,22 @@ impl StillPartners {
         })
     }
 
-    /// Takes in the motion of dynamic bodies the guard just moved (a push out can take a body
-    /// farther from where it began the step).
-    pub(super) fn note_moved(
+    /// Takes in the motion of the dynamic bodies the guard moved since it last looked (`moved`,
+    /// the guard's list, growing): a push out can take a body farther from where it began
+    /// the step.
+    pub(super) fn take_in_moved(
         &mut self,
         world: &PhysicsWorld,
         prev_poses: &PoseHistory,
         moved: &[RigidBodyHandle],
     ) {
-        for &bh in moved {
+        for &bh in moved.get(self.seen..).unwrap_or_default() {
             if world.bodies.get(bh).is_some_and(|b| b.is_dynamic()) {
                 let d = body_motion(prev_poses, &world.bodies, Some(bh));
                 self.max_dynamic_motion = self.max_dynamic_motion.max(d.length());
             }
         }
+        self.seen = moved.len();
     }
 }
 
