@@ -12,7 +12,7 @@ use parry3d::query::Ray;
 ///
 /// A convex polyhedron gives the normal of its nearest face plane; a ball, a capsule, a
 /// cylinder or a cone, its exact normal ([`round_normal`]); a compound, its nearest part's normal; an
-/// oriented triangle mesh, its nearest feature's (pseudo-)normal. Any other shape: a short ray
+/// oriented triangle mesh, its nearest triangle's normal. Any other shape: a short ray
 /// cast from just outside the point, back toward the shape's centre, hits the boundary next to
 /// the point and returns the exact normal there (parry's feature normals at a boundary point
 /// are unreliable for cylinders and cones, and missing for capsules and round shapes); where
@@ -46,12 +46,13 @@ pub(crate) fn outward_normal(
             return pose.rotation * inner;
         }
     }
-    // A triangle mesh (oriented: the tool's query shape): the normal of the nearest feature,
-    // a pseudo-normal on an edge or a vertex.
+    // A triangle mesh (oriented: the tool's query shape): the normal of the nearest triangle
+    // (the projection's sub-shape: parry answers for the triangle it is given; asked for the
+    // first one, a U's end cap, it held a vertex on a leg's bottom edge along the cap's normal).
     if shape.as_trimesh().is_some() {
         let (proj, feature) = shape.project_local_point_and_get_feature(local);
         if let Some(n) = shape
-            .feature_normal_at_point(0, feature, proj.point)
+            .feature_normal_at_point(proj.subshape, feature, proj.point)
             .filter(|n| n.is_finite())
             .and_then(|n| n.try_normalize())
         {
@@ -88,7 +89,7 @@ pub(crate) fn outward_normal(
     }
     let (proj, feature) = shape.project_local_point_and_get_feature(local);
     shape
-        .feature_normal_at_point(0, feature, proj.point)
+        .feature_normal_at_point(proj.subshape, feature, proj.point)
         .filter(|n| n.is_finite() && n.dot(radial) > 0.0)
         .unwrap_or(radial)
 }
@@ -107,9 +108,10 @@ fn nearest_part(
 }
 
 /// [`outward_normal`] for a point on two or more flat faces at once (an edge or a corner of a
-/// cuboid or a convex polyhedron, or of a compound's such part: face planes within `margin` of
-/// the nearest): the one of those faces whose normal is most along `prefer` (shape frame; the
-/// way the point pushes out of the tool). Elsewhere, and for `prefer` zero, [`outward_normal`].
+/// cuboid, a convex polyhedron or a triangle mesh, or of a compound's such part: face planes,
+/// or a mesh's triangles, within `margin` of the nearest): the one of those faces whose normal
+/// is most along `prefer` (shape frame; the way the point pushes out of the tool). Elsewhere,
+/// and for `prefer` zero, [`outward_normal`].
 ///
 /// At an edge the nearest face is a tie that rounding breaks: a plate vertex held on the
 /// bottom edge of a resting jaw took the side face's normal at every other substep, slid
@@ -133,31 +135,35 @@ pub(crate) fn outward_normal_toward(
                 return pose.rotation * inner;
             }
         }
-        let planes: Vec<(Vector, Real)> = if let Some(c) = shape.as_cuboid() {
-            let h = c.half_extents;
-            [Vector::X, Vector::Y, Vector::Z]
-                .into_iter()
-                .zip([h.x, h.y, h.z])
-                .flat_map(|(axis, half)| [(axis, half), (-axis, half)])
-                .map(|(n, half)| (n, n.dot(local) - half))
-                .collect()
-        } else if let Some(poly) = shape.as_convex_polyhedron() {
-            face_planes(poly)
-                .map(|(n, v)| (n, n.dot(local - v)))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let nearest = planes
-            .iter()
-            .map(|p| p.1)
-            .fold(Real::NEG_INFINITY, Real::max);
         let tol = margin.max(1e-6 * shape.compute_local_aabb().extents().max_element());
-        let on: Vec<Vector> = planes
-            .iter()
-            .filter(|p| p.1 >= nearest - tol)
-            .map(|p| p.0)
-            .collect();
+        let on = if let Some(mesh) = shape.as_trimesh() {
+            mesh_faces_at(mesh, local, tol)
+        } else {
+            let planes: Vec<(Vector, Real)> = if let Some(c) = shape.as_cuboid() {
+                let h = c.half_extents;
+                [Vector::X, Vector::Y, Vector::Z]
+                    .into_iter()
+                    .zip([h.x, h.y, h.z])
+                    .flat_map(|(axis, half)| [(axis, half), (-axis, half)])
+                    .map(|(n, half)| (n, n.dot(local) - half))
+                    .collect()
+            } else if let Some(poly) = shape.as_convex_polyhedron() {
+                face_planes(poly)
+                    .map(|(n, v)| (n, n.dot(local - v)))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            let nearest = planes
+                .iter()
+                .map(|p| p.1)
+                .fold(Real::NEG_INFINITY, Real::max);
+            planes
+                .iter()
+                .filter(|p| p.1 >= nearest - tol)
+                .map(|p| p.0)
+                .collect()
+        };
         if on.len() > 1 {
             if let Some(n) = on
                 .into_iter()
@@ -168,6 +174,38 @@ pub(crate) fn outward_normal_toward(
         }
     }
     outward_normal(shape, local, margin)
+}
+
+/// The distinct normals of the triangles of `mesh` (as wound: an oriented tool mesh's outward
+/// normals) within `tol` of the nearest one to `local`: one at a face, two or more at an edge
+/// or a corner. (Without it a point on a mesh's edge took the normal of whichever of the two
+/// faces' triangles rounding made nearest, as a cuboid's did before [`outward_normal_toward`].)
+fn mesh_faces_at(mesh: &parry3d::shape::TriMesh, local: Vector, tol: Real) -> Vec<Vector> {
+    let probe = parry3d::bounding_volume::Aabb::new(
+        local - Vector::splat(2.0 * tol),
+        local + Vector::splat(2.0 * tol),
+    );
+    let faces: Vec<(Vector, Real)> = mesh
+        .bvh()
+        .intersect_aabb(&probe)
+        .filter_map(|t| {
+            let tri = mesh.triangle(t);
+            let n = tri.normal()?;
+            let d = (parry3d::query::PointQuery::project_local_point(&tri, local, false).point
+                - local)
+                .length();
+            Some((n, d))
+        })
+        .collect();
+    let nearest = faces.iter().map(|f| f.1).fold(Real::INFINITY, Real::min);
+    let mut on: Vec<Vector> = Vec::new();
+    for (n, d) in faces {
+        // (Two triangles of one flat face give one normal.)
+        if d <= nearest + tol && on.iter().all(|m| m.dot(n) < 1.0 - 1e-6) {
+            on.push(n);
+        }
+    }
+    on
 }
 
 /// The outward normal of a ball, a capsule, a cylinder or a cone at `local`, exactly (for the

@@ -201,9 +201,9 @@ fn bad_points_give_finite_answers_or_none() {
     }
 }
 
-/// On an edge or a corner of a cuboid, of the same box as a convex hull and of a compound's
-/// box part, the normal is the face most along the preferred direction, and away from them
-/// the nearest face's whatever the preference. Checked on the box's own face normals, at
+/// On an edge or a corner of a cuboid, of the same box as a convex hull, as a triangle mesh
+/// and of a compound's box part, the normal is the face most along the preferred direction,
+/// and away from them the nearest face's whatever the preference. Checked on the box's own face normals, at
 /// scales from 0.1 mm to 1 km.
 #[test]
 fn an_edge_point_takes_the_face_it_pushes_against() {
@@ -220,6 +220,15 @@ fn an_edge_point_takes_the_face_it_pushes_against() {
         let shapes: Vec<(SharedShape, Pose)> = vec![
             (SharedShape::new(Cuboid::new(h)), Pose::IDENTITY),
             (SharedShape::convex_hull(&corners).unwrap(), Pose::IDENTITY),
+            // A triangle mesh: at an edge the nearest triangle is a tie that rounding breaks,
+            // and each face of the box is two triangles.
+            (
+                {
+                    let (v, i) = Cuboid::new(h).to_trimesh();
+                    SharedShape::trimesh(v, i).unwrap()
+                },
+                Pose::IDENTITY,
+            ),
             (
                 SharedShape::compound(vec![(offset, SharedShape::new(Cuboid::new(h)))]),
                 offset,
@@ -290,5 +299,36 @@ fn an_unusable_preference_falls_back_to_the_nearest_face() {
         let n = outward_normal_toward(shape.as_ref(), p, 1e-6, -Vector::Y);
         let plain = outward_normal(shape.as_ref(), p, 1e-6);
         assert_eq!(n.is_finite(), plain.is_finite(), "{n} against {plain}");
+    }
+}
+
+/// A triangle mesh's normal at a point on one of its faces is that face's, whichever of its
+/// triangles is nearest: the box as a mesh, every face, at scales from 0.1 mm to 1 km, with
+/// and without a preference. (It read the normal of the mesh's first triangle wherever the
+/// point was: parry's `feature_normal_at_point` takes the triangle the projection reports.)
+#[test]
+fn a_mesh_point_takes_its_own_faces_normal() {
+    use parry3d::shape::{Cuboid, SharedShape};
+    for scale in [1e-4f32, 0.03, 1.0, 1e3] {
+        let h = Vector::new(0.015, 0.03, 0.02) * scale;
+        let (v, i) = Cuboid::new(h).to_trimesh();
+        let mesh = SharedShape::trimesh(v, i).unwrap();
+        for axis in [Vector::X, Vector::Y, Vector::Z] {
+            for n in [axis, -axis] {
+                // A point on the face, off its centre and off the diagonal its two triangles
+                // share.
+                let (u, w) = n.any_orthonormal_pair();
+                let p = n * n.dot(h).abs() + (u * 0.3 + w * 0.1) * h.abs().min_element();
+                for prefer in [Vector::ZERO, n, -n, u] {
+                    let got = outward_normal_toward(mesh.as_ref(), p, 1e-4 * scale, prefer);
+                    assert!(
+                        (got - n).length() < 1e-5,
+                        "scale {scale}: {got} at {p} on the face {n}, preferring {prefer}"
+                    );
+                }
+                let got = outward_normal(mesh.as_ref(), p, 1e-4 * scale);
+                assert!((got - n).length() < 1e-5, "scale {scale}: {got} for {n}");
+            }
+        }
     }
 }
