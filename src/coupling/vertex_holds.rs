@@ -128,6 +128,26 @@ pub(super) fn hold_vertices(
         if !out.is_finite() {
             continue;
         }
+        // A sliding vertex held in the last substep that is now outside the tool, carried
+        // there by its own motion along the face it was held on (more than 60° from that
+        // face's normal): it slid off the face, past an edge or a corner, and is let go where
+        // it is. (A vertex left outside by the tool's motion, or lifted off a curved tool by
+        // its curvature, is still in contact: put back below unless its springs pull it
+        // away.) A tilted U's leg held a plate vertex on its bottom edge while the leg's
+        // corner pressed the triangle beside it with 0.78 of the point's weight on the
+        // vertex: the press's push slid the vertex along the leg's bottom, off the edge, in
+        // every substep, the hold put it back by position alone, and the press pushed its two
+        // free neighbours down after it: the tool's force read 6.14 N for the pins' 6.38 N.
+        // Let go, the vertex rests outside the leg and the corner's press holds the triangle.
+        if stuck.is_none() && !entering && gap > margin {
+            let was = surface.last_held_normal(iu);
+            let slid_off = (*p - out).try_normalize().is_some_and(|away| {
+                was != Vector::ZERO && own.dot(away) > 0.5 * gap && away.dot(was).abs() < 0.5
+            });
+            if slid_off {
+                continue;
+            }
+        }
         // The tool's outward normal at the contact point (at an edge or a corner, the face
         // the vertex's springs push it against), and the vertex's way back onto it.
         let push = pose.rotation.inverse() * -surface.internal_force(iu);

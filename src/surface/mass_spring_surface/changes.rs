@@ -207,6 +207,14 @@ impl MassSpringSurface {
             _ => Vector::ZERO,
         }
     }
+    /// The normal vertex `i` was last held along by a sliding hold, held now or not (kept
+    /// through [`MassSpringSurface::release_all`]: what a tool that held it in the last substep
+    /// held it along); zero for a full hold, or a vertex never held or out of range.
+    pub(crate) fn last_held_normal(&self, i: u32) -> Vector {
+        self.held_normal
+            .get(i as usize)
+            .map_or(Vector::ZERO, |n| n.as_vec3())
+    }
 
     pub(super) fn check_vertex(&self, i: u32) -> Result<(), SurfaceError> {
         if (i as usize) < self.home.len() {
