@@ -391,9 +391,10 @@ fn odd_dynamic_tools_stay_finite_and_keep_their_locks() {
 fn a_light_u_at_rest_is_not_thrown_by_a_triangle_crossing_its_leg() {
     check_drawn(Body::U, -1.4669794, 1.0806595, 2.3704262, false).unwrap();
 }
+
 /// Another case of that test (random seed 6107): an 8.3 kg U set down on a plate of 10 N/m
-/// edges, one substep, sinks into a funnel deeper than itself, its bottom corners in the plate's
-/// triangles. A first version of the check above, which asked the triangle's point to be
+/// edges, one substep, sinks into a funnel deeper than itself, its bottom corners in the
+/// plate's triangles. A first version of the check above, which asked the triangle's point to be
 /// inside the tool by the mesh's point query, let go of those corners' contacts (their points
 /// read just outside the corners) and the U went through; it must not pass the plate.
 #[test]

@@ -523,13 +523,12 @@ fn a_jaws_edge_beside_a_held_vertex_holds_the_far_vertex_through_the_step() {
 /// axis 4.18 rad from x, over (0.036, 0). A plate vertex lay on a leg's bottom edge, and the
 /// leg's corner pressed the triangle beside it with 0.78 of the point's weight on that vertex.
 /// The vertex was held along the normal of the mesh's first triangle (an end cap's, whatever
-/// the point), so the press's push moved it along the leg's bottom, off the edge, in every
-/// substep, the hold put it back by position alone, and the press pushed the triangle's two
-/// free vertices down 0.14 and 0.07 mm after it: the tool's force read 4.63 N for the pins'
-/// 6.38 N. With the right face (the leg's bottom, the one its springs push it against) the same
-/// cycle ran along that face: 6.14 N. Now a vertex that slides off the face it was held on is
-/// let go: it rests outside the leg, the corner's press holds its triangle, and the forces
-/// balance.
+/// the point), so the press's push moved it off the edge in every substep, the hold put it
+/// back by position alone, and the press pushed the triangle's two free vertices down 0.14
+/// and 0.07 mm after it: the tool's force read 4.63 N for the pins' 6.38 N. With the right
+/// face (the leg's bottom, the one its springs push it against) the same cycle ran along that
+/// face: 6.14 N. Now a vertex that slides off the face it was held on is let go: it rests
+/// outside the leg, the corner's press holds its triangle, and the forces balance.
 #[test]
 fn a_vertex_pushed_off_a_legs_edge_by_a_corners_press_is_let_go() {
     let (yaw, tilt, tilt_axis) = (3.444578f32, 0.39f32, 4.183843f32);
