@@ -7,9 +7,7 @@
 //! [`crate::coupling`] press the surface with these, besides their own vertices and edges
 //! ([`super::tool_surface_contacts`]).
 
-use super::tool_boundary::{
-    distance_outside, nearest_on_boundary, outward_normal, outward_normal_toward,
-};
+use super::tool_boundary::{distance_outside, faces_at, nearest_on_boundary, outward_normal};
 use super::{Feature, SurfaceContact};
 use crate::math::{Pose, Real, Vector};
 
@@ -194,8 +192,8 @@ pub(crate) fn triangle_contacts(
             continue;
         }
         // A penetration's normal must be the tool's where it touches it: a face's own normal
-        // (within 10°) on a face, a normal leaning the way of one of the faces at an edge or
-        // a corner (the face most along it). parry's contact between a triangle mesh and a
+        // (within 10°) on a face or a curved boundary, a normal leaning the way of one of the
+        // faces at an edge or a corner. parry's contact between a triangle mesh and a
         // triangle crossing one of its triangles is their deepest pair's, and two flat
         // triangles crossing each other can give any depth along any normal: a 34 g U resting
         // on its legs on a plate met a plate triangle 5.1 cm "deep" at a leg's inner wall
@@ -205,10 +203,13 @@ pub(crate) fn triangle_contacts(
         if -c.dist > margin + slop {
             let local = pose.inverse_transform_point(c.point1);
             let along = pose.rotation.inverse() * n;
-            let face = outward_normal_toward(shape, local, margin, along);
-            // (One face either way the preference points: a face, or a curved boundary.)
-            let single = outward_normal_toward(shape, local, margin, -along) == face;
-            if face.dot(along) <= if single { 0.985 } else { 0.0 } {
+            let faces = faces_at(shape, local, margin);
+            let toward_tool = if faces.len() > 1 {
+                faces.iter().any(|f| f.dot(along) > 0.0)
+            } else {
+                outward_normal(shape, local, margin).dot(along) > 0.985
+            };
+            if !toward_tool {
                 continue;
             }
         }

@@ -107,11 +107,9 @@ fn nearest_part(
     })
 }
 
-/// [`outward_normal`] for a point on two or more flat faces at once (an edge or a corner of a
-/// cuboid, a convex polyhedron or a triangle mesh, or of a compound's such part: face planes,
-/// or a mesh's triangles, within `margin` of the nearest): the one of those faces whose normal
-/// is most along `prefer` (shape frame; the way the point pushes out of the tool). Elsewhere,
-/// and for `prefer` zero, [`outward_normal`].
+/// [`outward_normal`] for a point on two or more flat faces at once ([`faces_at`]): the one
+/// of those faces whose normal is most along `prefer` (shape frame; the way the point pushes
+/// out of the tool). Elsewhere, and for `prefer` zero, [`outward_normal`].
 ///
 /// At an edge the nearest face is a tie that rounding breaks: a plate vertex held on the
 /// bottom edge of a resting jaw took the side face's normal at every other substep, slid
@@ -124,46 +122,7 @@ pub(crate) fn outward_normal_toward(
     prefer: Vector,
 ) -> Vector {
     if prefer != Vector::ZERO && prefer.is_finite() {
-        if let Some(compound) = shape.as_compound() {
-            if let Some((pose, part)) = nearest_part(compound, local) {
-                let inner = outward_normal_toward(
-                    part.as_ref(),
-                    pose.inverse_transform_point(local),
-                    margin,
-                    pose.rotation.inverse() * prefer,
-                );
-                return pose.rotation * inner;
-            }
-        }
-        let tol = margin.max(1e-6 * shape.compute_local_aabb().extents().max_element());
-        let on = if let Some(mesh) = shape.as_trimesh() {
-            mesh_faces_at(mesh, local, tol)
-        } else {
-            let planes: Vec<(Vector, Real)> = if let Some(c) = shape.as_cuboid() {
-                let h = c.half_extents;
-                [Vector::X, Vector::Y, Vector::Z]
-                    .into_iter()
-                    .zip([h.x, h.y, h.z])
-                    .flat_map(|(axis, half)| [(axis, half), (-axis, half)])
-                    .map(|(n, half)| (n, n.dot(local) - half))
-                    .collect()
-            } else if let Some(poly) = shape.as_convex_polyhedron() {
-                face_planes(poly)
-                    .map(|(n, v)| (n, n.dot(local - v)))
-                    .collect()
-            } else {
-                Vec::new()
-            };
-            let nearest = planes
-                .iter()
-                .map(|p| p.1)
-                .fold(Real::NEG_INFINITY, Real::max);
-            planes
-                .iter()
-                .filter(|p| p.1 >= nearest - tol)
-                .map(|p| p.0)
-                .collect()
-        };
+        let on = faces_at(shape, local, margin);
         if on.len() > 1 {
             if let Some(n) = on
                 .into_iter()
@@ -174,6 +133,53 @@ pub(crate) fn outward_normal_toward(
         }
     }
     outward_normal(shape, local, margin)
+}
+
+/// The normals of the flat faces `local` (shape frame, on the boundary) lies on, when it lies
+/// on two or more at once (an edge or a corner of a cuboid, a convex polyhedron or a triangle
+/// mesh, or of a compound's nearest such part: face planes, or a mesh's triangles, within
+/// `margin` of the nearest); one or none elsewhere (a face, a curved boundary).
+pub(crate) fn faces_at(
+    shape: &dyn parry3d::shape::Shape,
+    local: Vector,
+    margin: Real,
+) -> Vec<Vector> {
+    if let Some(compound) = shape.as_compound() {
+        if let Some((pose, part)) = nearest_part(compound, local) {
+            return faces_at(part.as_ref(), pose.inverse_transform_point(local), margin)
+                .into_iter()
+                .map(|n| pose.rotation * n)
+                .collect();
+        }
+    }
+    let tol = margin.max(1e-6 * shape.compute_local_aabb().extents().max_element());
+    if let Some(mesh) = shape.as_trimesh() {
+        return mesh_faces_at(mesh, local, tol);
+    }
+    let planes: Vec<(Vector, Real)> = if let Some(c) = shape.as_cuboid() {
+        let h = c.half_extents;
+        [Vector::X, Vector::Y, Vector::Z]
+            .into_iter()
+            .zip([h.x, h.y, h.z])
+            .flat_map(|(axis, half)| [(axis, half), (-axis, half)])
+            .map(|(n, half)| (n, n.dot(local) - half))
+            .collect()
+    } else if let Some(poly) = shape.as_convex_polyhedron() {
+        face_planes(poly)
+            .map(|(n, v)| (n, n.dot(local - v)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let nearest = planes
+        .iter()
+        .map(|p| p.1)
+        .fold(Real::NEG_INFINITY, Real::max);
+    planes
+        .iter()
+        .filter(|p| p.1 >= nearest - tol)
+        .map(|p| p.0)
+        .collect()
 }
 
 /// The distinct normals of the triangles of `mesh` (as wound: an oriented tool mesh's outward

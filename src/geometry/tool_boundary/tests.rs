@@ -203,8 +203,8 @@ fn bad_points_give_finite_answers_or_none() {
 
 /// On an edge or a corner of a cuboid, of the same box as a convex hull, as a triangle mesh
 /// and of a compound's box part, the normal is the face most along the preferred direction,
-/// and away from them the nearest face's whatever the preference. Checked on the box's own face normals, at
-/// scales from 0.1 mm to 1 km.
+/// and away from them the nearest face's whatever the preference. Checked on the box's own
+/// face normals, at scales from 0.1 mm to 1 km.
 #[test]
 fn an_edge_point_takes_the_face_it_pushes_against() {
     use parry3d::shape::{Cuboid, SharedShape};
