@@ -315,8 +315,7 @@ proptest! {
         u in any::<bool>(), yaw in 0.0f32..std::f32::consts::TAU, tilt in 0.0f32..0.4,
         tilt_axis in 0.0f32..std::f32::consts::TAU, x in -0.15f32..0.15, z in -0.15f32..0.15,
     ) {
-        let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
-        let turn = Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw);
+        let turn = turned(yaw, tilt, tilt_axis);
         let (shape, probes) = if u { (u_shape(), u_corners()) } else { jaws() };
         let lowest = probes.iter().map(|c| (turn * *c).y).fold(f32::MAX, f32::min);
         let r = press_at(shape, turn, lowest, &probes, (x, z));
@@ -367,12 +366,7 @@ fn a_flat_cuboid_keeps_its_corners_out_of_a_triangle_beside_a_held_vertex() {
 fn tilted_u_at_rest(at: (f32, f32)) -> Pressed {
     let axis = Vector::new(1.8131207f32.cos(), 0.0, 1.8131207f32.sin());
     let turn = Rotation::from_axis_angle(axis, 0.014028846);
-    let probes = u_corners();
-    let lowest = probes
-        .iter()
-        .map(|c| (turn * *c).y)
-        .fold(f32::MAX, f32::min);
-    let r = press_at(u_shape(), turn, lowest, &probes, at);
+    let r = u_pressed(turn, at);
     let s = &r.set.get(r.surface).unwrap().surface;
     let fastest = (0..s.num_vertices() as u32)
         .map(|i| s.velocity(i).length())
@@ -422,6 +416,24 @@ fn a_jaws_corner_beside_a_held_vertex_stays_out_of_its_triangle() {
     check(&r, inside_of(&r), &[], "jaws over (0.11, 0)");
 }
 
+/// Turned `yaw` about the vertical, then tilted `tilt` about the horizontal axis `tilt_axis`
+/// from x (the tilted-tools property test's turn).
+fn turned(yaw: f32, tilt: f32, tilt_axis: f32) -> Rotation {
+    let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
+    Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw)
+}
+
+/// The U legs down, turned by `turn`, pressed at `at` (`press_at` asserts after every step
+/// that no leg's bottom corner is under the surface).
+fn u_pressed(turn: Rotation, at: (f32, f32)) -> Pressed {
+    let probes = u_corners();
+    let lowest = probes
+        .iter()
+        .map(|c| (turn * *c).y)
+        .fold(f32::MAX, f32::min);
+    press_at(u_shape(), turn, lowest, &probes, at)
+}
+
 /// The jaws turned by `turn`, pressed at `at` (`press_at` asserts after every step that no
 /// bottom corner is under the surface).
 fn jaws_pressed(turn: Rotation, at: (f32, f32)) -> Pressed {
@@ -445,8 +457,7 @@ fn jaws_pressed(turn: Rotation, at: (f32, f32)) -> Pressed {
 #[test]
 fn a_jaws_contacts_between_vertices_hold_steady_at_rest_and_balance_the_pins() {
     let (yaw, tilt, tilt_axis) = (1.3718774f32, 0.038617287f32, 0.3322033f32);
-    let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
-    let turn = Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw);
+    let turn = turned(yaw, tilt, tilt_axis);
     let r = jaws_pressed(turn, (0.14987464, 0.14828624));
     check(&r, inside_of(&r), &[], "jaws over (0.150, 0.148)");
     // Steady through the step: the last substep's force is the step's mean.
@@ -532,14 +543,7 @@ fn a_jaws_edge_beside_a_held_vertex_holds_the_far_vertex_through_the_step() {
 #[test]
 fn a_vertex_pushed_off_a_legs_edge_by_a_corners_press_is_let_go() {
     let (yaw, tilt, tilt_axis) = (3.444578f32, 0.39f32, 4.183843f32);
-    let horizontal = Vector::new(tilt_axis.cos(), 0.0, tilt_axis.sin());
-    let turn = Rotation::from_axis_angle(horizontal, tilt) * Rotation::from_rotation_y(yaw);
-    let probes = u_corners();
-    let lowest = probes
-        .iter()
-        .map(|c| (turn * *c).y)
-        .fold(f32::MAX, f32::min);
-    let r = press_at(u_shape(), turn, lowest, &probes, (0.036, 0.0));
+    let r = u_pressed(turned(yaw, tilt, tilt_axis), (0.036, 0.0));
     check(&r, inside_u(&r), &[], "U over (0.036, 0)");
     balances_the_pins(&r, 0.01, "U over (0.036, 0)");
     let reaction = r.set.tool_reaction(r.tool).unwrap();
