@@ -332,3 +332,55 @@ fn a_mesh_point_takes_its_own_faces_normal() {
         }
     }
 }
+
+/// A point inside a closed triangle mesh (oriented, as the coupling's query shape is) is no
+/// distance outside it, and one outside is its distance from the mesh: a U, at scales from
+/// 0.1 mm to 1 km, against the
+/// distances written here. (Inside a mesh it read the distance to the nearest face: parry's
+/// solid distance for a mesh is the distance to its projection, the boundary.)
+#[test]
+fn a_point_inside_a_closed_mesh_is_no_distance_outside() {
+    use parry3d::shape::{SharedShape, TriMeshFlags};
+    // A U in the xy plane (legs down), extruded 2 in z: legs 1 wide and 2 tall, 1 apart,
+    // under a bridge 1 thick.
+    let outline = [
+        [-1.5f32, -2.0],
+        [-0.5, -2.0],
+        [-0.5, 0.0],
+        [0.5, 0.0],
+        [0.5, -2.0],
+        [1.5, -2.0],
+        [1.5, 1.0],
+        [-1.5, 1.0],
+    ];
+    for scale in [1e-4f32, 0.03, 1.0, 1e3] {
+        let scaled: Vec<[Real; 2]> = outline
+            .iter()
+            .map(|[x, y]| [x * scale, y * scale])
+            .collect();
+        let (v, i) = crate::geometry::generators::extruded_polygon(&scaled, 2.0 * scale).unwrap();
+        let mesh = SharedShape::trimesh_with_flags(v, i, TriMeshFlags::ORIENTED).unwrap();
+        // (point, its distance outside): in a leg near its outer bottom edge, in the middle
+        // of a leg, in the bridge, between the legs under the bridge, beside a leg.
+        let cases = [
+            (Vector::new(1.45, -1.95, 0.3), 0.0),
+            (Vector::new(1.0, -1.0, 0.0), 0.0),
+            (Vector::new(0.0, 0.5, -0.9), 0.0),
+            (Vector::new(0.0, -1.0, 0.0), 0.5),
+            (Vector::new(1.8, -1.0, 0.2), 0.3),
+        ];
+        let pose = Pose::new(
+            Vector::new(3.0, -1.0, 2.0) * scale,
+            Vector::new(0.3, -0.7, 0.2),
+        );
+        for (p, want) in cases {
+            let at = pose.transform_point(p * scale);
+            let got = distance_outside(mesh.as_ref(), &pose, at);
+            assert!(
+                (got - want * scale).abs() <= 1e-4 * scale,
+                "scale {scale}: {got} outside at {p}, not {}",
+                want * scale
+            );
+        }
+    }
+}

@@ -55,6 +55,19 @@ fn press_with(
     at: (f32, f32),
     friction: Friction,
 ) -> Pressed {
+    press_over(shape, turn, lowest, probes, at, friction, 40)
+}
+
+/// [`press_with`], lowered over `ramp` steps.
+fn press_over(
+    shape: SharedShape,
+    turn: Rotation,
+    lowest: f32,
+    probes: &[Vector],
+    at: (f32, f32),
+    friction: Friction,
+    ramp: usize,
+) -> Pressed {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
@@ -89,8 +102,8 @@ fn press_with(
         surface,
         tool,
     };
-    for step in 0..240 {
-        let a = ((step + 1) as f32 / 40.0).min(1.0);
+    for step in 0..200 + ramp {
+        let a = ((step + 1) as f32 / ramp as f32).min(1.0);
         step_to(&mut r, above.lerp(below, a), probes, step);
     }
     r
@@ -188,6 +201,11 @@ fn check(r: &Pressed, inside: impl Fn(Vector) -> f32, dents: &[(f32, f32)], name
 
 /// A U: two legs 40 mm wide, 100 mm apart, 100 mm long, joined on top; 80 mm deep in z.
 fn u_shape() -> SharedShape {
+    u_shape_scaled(1.0)
+}
+
+/// [`u_shape`] scaled by `k`.
+fn u_shape_scaled(k: f32) -> SharedShape {
     let outline = [
         [-0.09, 0.0],
         [-0.05, 0.0],
@@ -198,7 +216,8 @@ fn u_shape() -> SharedShape {
         [0.09, 0.15],
         [-0.09, 0.15],
     ];
-    let (v, i) = extruded_polygon(&outline, 0.08).unwrap();
+    let outline = outline.map(|[x, y]| [k * x, k * y]);
+    let (v, i) = extruded_polygon(&outline, 0.08 * k).unwrap();
     SharedShape::trimesh(v, i).unwrap()
 }
 
@@ -235,6 +254,40 @@ fn u_shaped_trimesh_tool_pressed_legs_down_holds_and_gets_the_pins_force() {
         inside,
         &[(-0.057, -0.021), (0.083, -0.021)],
         "U legs down",
+    );
+}
+
+/// A U three times the size (legs 12 cm wide, two plate cells) lowered 8 cm in two steps (5 mm
+/// a substep; the other tools here come down 0.25 mm a substep): the plate vertices its legs'
+/// bottoms pass are held and pressed out, as at a slow press. It passed on the code before this stop's fix of the inside distance
+/// too: what holds a vertex deep inside a mesh tool here was not traced.
+#[test]
+fn a_large_u_pressed_in_two_steps_holds_and_gets_the_pins_force() {
+    let k = 3.0;
+    let corners: Vec<Vector> = [-0.09, -0.05, 0.05, 0.09]
+        .iter()
+        .flat_map(|&x| {
+            [
+                Vector::new(k * x, 0.0, -0.04 * k),
+                Vector::new(k * x, 0.0, 0.04 * k),
+            ]
+        })
+        .collect();
+    let r = press_over(
+        u_shape_scaled(k),
+        Rotation::IDENTITY,
+        0.0,
+        &corners,
+        (0.013, -0.021),
+        Friction::NONE,
+        2,
+    );
+    let inside = inside_u(&r);
+    check(
+        &r,
+        inside,
+        &[(0.013 - 0.07 * k, -0.021), (0.013 + 0.07 * k, -0.021)],
+        "large U pressed in two steps",
     );
 }
 
