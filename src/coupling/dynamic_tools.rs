@@ -320,6 +320,7 @@ pub(super) fn press_dynamic(
         ),
         vertex_depth,
         (margin, dynamic.get(j).map_or(margin, |d| d.slop)),
+        t.shape.unit.as_ref().map(|(k, u)| (*k, u.as_ref())),
         contacts,
         velocities,
     );

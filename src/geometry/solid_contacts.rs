@@ -102,6 +102,7 @@ pub(crate) fn triangle_contacts(
     ),
     vertex_depth: impl Fn(u32) -> Option<Real>,
     (margin, slop): (Real, Real),
+    unit: Option<(Real, &dyn parry3d::shape::Shape)>,
     contacts: &mut Vec<SurfaceContact>,
     tool_velocities: &mut Vec<Vector>,
 ) {
@@ -127,7 +128,7 @@ pub(crate) fn triangle_contacts(
             .map(|&v| velocity(v).length())
             .fold(0.0, Real::max);
         let reach = 2.0 * h * (tool(centroid).length() + own) + margin;
-        let Ok(Some(c)) = parry3d::query::contact(pose, shape, &Pose::IDENTITY, &tri, reach) else {
+        let Some(c) = contact(shape, pose, &tri, reach, unit) else {
             continue;
         };
         let (_, location) = tri.project_local_point_and_get_location(c.point2, false);
@@ -282,10 +283,35 @@ pub(crate) fn triangle_contacts(
     tool_velocities.truncate(k);
 }
 
+/// parry's contact between the tool (`shape` at `pose`) and `tri` within `reach`, asked of
+/// `unit` (the shape scaled by its factor) where there is one: in the tool's frame scaled by
+/// the factor, its translation taken out (the answer is brought back to `pose`'s frame).
+fn contact(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    tri: &parry3d::shape::Triangle,
+    reach: Real,
+    unit: Option<(Real, &dyn parry3d::shape::Shape)>,
+) -> Option<parry3d::query::Contact> {
+    use parry3d::shape::Triangle;
+    let Some((k, scaled)) = unit else {
+        return parry3d::query::contact(pose, shape, &Pose::IDENTITY, tri, reach).ok()?;
+    };
+    let o = pose.translation;
+    let turned = Pose::from_parts(Vector::ZERO, pose.rotation);
+    let near = Triangle::new((tri.a - o) * k, (tri.b - o) * k, (tri.c - o) * k);
+    let mut c =
+        parry3d::query::contact(&turned, scaled, &Pose::IDENTITY, &near, reach * k).ok()??;
+    c.point1 = c.point1 / k + o;
+    c.point2 = c.point2 / k + o;
+    c.dist /= k;
+    Some(c)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use parry3d::shape::{Ball, Triangle};
+    use parry3d::shape::{Ball, Shape, Triangle};
 
     /// Two triangles sharing an edge, a ball whose nearest surface point lies just inside the
     /// second one (a weight under `SNAP` on its third vertex, so taken onto the edge), the
@@ -309,7 +335,15 @@ mod tests {
             let centre = Vector::new(0.3 * scale, radius - 1e-3 * scale, 0.005 * scale);
             let pose = Pose::from_translation(centre);
             let ball = Ball::new(radius);
-            for order in [[0u32, 1], [1, 0]] {
+            // Asked as it is, and of a unit ball scaled back (the path a small tool's unit
+            // copy takes).
+            let unit_ball = Ball::new(1.0);
+            for (order, unit) in [[0u32, 1], [1, 0]].into_iter().flat_map(|o| {
+                [
+                    (o, None),
+                    (o, Some((1.0 / radius, &unit_ball as &dyn Shape))),
+                ]
+            }) {
                 let (mut contacts, mut velocities) = (Vec::new(), Vec::new());
                 triangle_contacts(
                     &ball,
@@ -319,6 +353,7 @@ mod tests {
                     (&triangles, &order, &positions, |_| Vector::ZERO),
                     |_| None,
                     (1e-4 * scale, 1e-3 * scale),
+                    unit,
                     &mut contacts,
                     &mut velocities,
                 );

@@ -23,10 +23,27 @@ struct Scaled {
     support: f32,
 }
 
+/// What is dropped.
+#[derive(Copy, Clone, Debug)]
+enum Body {
+    /// A ball of radius 0.08 s.
+    Ball,
+    /// A cube of half-side 0.08 s, landing flat.
+    Cube,
+    /// A U of triangles, legs down: 0.16 s wide and 0.1 s tall, legs 0.04 s wide, extruded
+    /// 0.16 s (the U of `dynamic_drops`).
+    U,
+}
+
 /// A plate of side `s` (16 × 16 cells, rim pinned, 0.5 s³ kg, edges of 100 s³ N/m with
 /// dampers of `√(k m)`), a ball of radius 0.08 s and 0.1 s³ kg dropped from 0.3 s above it,
 /// 10 s.
 fn drop(s: f32, substeps: u32) -> Scaled {
+    drop_body(Body::Ball, s, substeps)
+}
+
+/// [`drop`] with `body` (0.1 s³ kg; its lowest point 0.3 s above the plate).
+fn drop_body(body_kind: Body, s: f32, substeps: u32) -> Scaled {
     let (mass, k) = (0.1 * s * s * s, 100.0 * s * s * s);
     let mut world = PhysicsWorld::default();
     world.gravity *= s;
@@ -51,8 +68,32 @@ fn drop(s: f32, substeps: u32) -> Scaled {
         0.3 * s + r,
         0.0,
     )));
-    let volume = 4.0 / 3.0 * std::f32::consts::PI * r * r * r;
-    let ball = world.insert_collider(ColliderBuilder::ball(r).density(mass / volume), Some(body));
+    let (shape, volume) = match body_kind {
+        Body::Ball => (
+            ColliderBuilder::ball(r),
+            4.0 / 3.0 * std::f32::consts::PI * r * r * r,
+        ),
+        Body::Cube => (ColliderBuilder::cuboid(r, r, r), 8.0 * r * r * r),
+        Body::U => {
+            let outline = [
+                [-r, -r],
+                [-0.5 * r, -r],
+                [-0.5 * r, 0.0],
+                [0.5 * r, 0.0],
+                [0.5 * r, -r],
+                [r, -r],
+                [r, 0.25 * r],
+                [-r, 0.25 * r],
+            ];
+            let (v, i) =
+                rapier_touch::geometry::generators::extruded_polygon(&outline, 2.0 * r).unwrap();
+            (
+                ColliderBuilder::trimesh(v, i).unwrap(),
+                (2.0 * r * 1.25 * r - r * r) * 2.0 * r,
+            )
+        }
+    };
+    let ball = world.insert_collider(shape.density(mass / volume), Some(body));
     set.add_tool(ball, &mut world).unwrap();
     let weight = world.bodies[body].mass() * world.gravity.length();
     let mut out = Scaled {
@@ -97,6 +138,28 @@ fn a_ball_drops_onto_a_plate_alike_at_every_scale() {
             // The same landing, in units of the scale (a hundredth of the ball's radius).
             assert!((d.lowest - reference.lowest).abs() <= 8e-4, "{case}");
             assert!((d.end - reference.end).abs() <= 8e-4, "{case}");
+        }
+    }
+}
+
+/// A cube landing flat and a U of triangles landing on its legs (its tolerances, contact
+/// margins and the check of parry's triangle contacts all relative to the sizes), as the
+/// ball above: the same landing in units of the scale at 0.1 mm, 1 cm, 100 m and 10 km as
+/// at 1 m, carried, and no rebound faster than the impact.
+#[test]
+fn a_cube_and_a_u_drop_onto_a_plate_alike_at_every_scale() {
+    for body in [Body::Cube, Body::U] {
+        for substeps in [1, 17] {
+            let reference = drop_body(body, 1.0, substeps);
+            for s in [1e-4, 1e-2, 1e2, 1e4] {
+                let d = drop_body(body, s, substeps);
+                let case =
+                    format!("{body:?}, {s} m, {substeps} substeps: {d:?} against {reference:?}");
+                assert!(d.impact > 0.0 && d.rebound <= d.impact, "{case}");
+                assert!((d.support - 1.0).abs() <= 0.02, "{case}");
+                assert!((d.lowest - reference.lowest).abs() <= 8e-4, "{case}");
+                assert!((d.end - reference.end).abs() <= 8e-4, "{case}");
+            }
         }
     }
 }
