@@ -19,7 +19,7 @@
 //!   box at 0.05, 0.2 and 1 m/s, the speed column being the actual speed) and rapier's
 //!   `IntegrationParameters::length_unit = 0.01` on **every** side (rapier: the size of a
 //!   typical object relative to a metre), so rapier's run is the `cuboid` run in other units.
-//!   The touch pipeline keeps its default, absolute tolerances.
+//!   The touch pipeline's slops are in rapier's length unit too (`TouchOptions`).
 //!
 //! Prints a table; with `--csv`, the same rows as CSV with the header
 //! `side,scene,speed_mps,tunneled,max_penetration_m,resting_penetration_m,steps_to_rest,ms_per_step`.

@@ -502,11 +502,11 @@ fn before_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
         &mut colliders.colliders,
         sim.integration_parameters.dt,
     );
-    touch.prev = Some(
-        touch
-            .pipeline
-            .begin_step(&mut bodies.bodies, &colliders.colliders),
-    );
+    touch.prev = Some(touch.pipeline.begin_step(
+        &mut bodies.bodies,
+        &colliders.colliders,
+        sim.integration_parameters.length_unit,
+    ));
     touch.surfaces.begin_step(&colliders.colliders);
     touch
         .surfaces

@@ -77,8 +77,10 @@ use pair_view::PairStates;
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct TouchOptions {
     /// Penetration (along the trajectory) the step guard tolerates before it moves a body back
-    /// to first touch. Default `2e-4` m: below rapier's own resting overlap noise, well below the
-    /// 1 mm a user sees. Range `0 ..= 0.01`; smaller values correct more often.
+    /// to first touch, in rapier's length unit (`IntegrationParameters::length_unit` metres,
+    /// as rapier's own tolerances are; [`TouchOptions::in_length_unit`]). Default `2e-4` (at
+    /// rapier's default unit, 0.2 mm): below rapier's own resting overlap noise, well below
+    /// the 1 mm a user sees. Range `0 ..= 0.01`; smaller values correct more often.
     pub penetration_slop: Real,
     /// Correct poses between steps (the step guard). Default `true`. With `false` the crate only
     /// rewrites manifolds (hooks) and reports.
@@ -96,8 +98,9 @@ pub struct TouchOptions {
     /// at 40 % of the smaller extent of the body and the floor (never below this slop): held
     /// harder against the floor than the pile's bodies hold each other, the bottom of a pile
     /// was pushed into the body above each step and the pile's compression went there.
-    /// Default `9e-4` m: above rapier's usual resting overlap, below the 1 mm a user sees.
-    /// Range `slop ..= 0.01`.
+    /// In rapier's length unit, as the slop above. Default `9e-4` (0.9 mm at rapier's default
+    /// unit): above rapier's usual resting overlap, below the 1 mm a user sees. Range
+    /// `slop ..= 0.01`.
     pub resting_slop: Real,
     /// Guard passes per step (a correction can push a body into a third one). Default 3.
     pub max_passes: usize,
@@ -134,6 +137,30 @@ pub struct TouchOptions {
     pub report_touching: bool,
     /// Options of the reconstructions.
     pub reconstruction: ReconstructionOptions,
+}
+
+impl TouchOptions {
+    /// These options with the slops given in rapier's length unit (`length_unit` metres,
+    /// rapier's `IntegrationParameters::length_unit`) turned into metres, as the pipeline
+    /// uses them at each step; a unit that is not positive and finite counts as 1.
+    ///
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// let options = TouchOptions::default().in_length_unit(0.01);
+    /// assert!((options.penetration_slop - 2e-6).abs() < 1e-12);
+    /// ```
+    pub fn in_length_unit(self, length_unit: Real) -> Self {
+        let unit = if length_unit.is_finite() && length_unit > 0.0 {
+            length_unit
+        } else {
+            1.0
+        };
+        Self {
+            penetration_slop: self.penetration_slop * unit,
+            resting_slop: self.resting_slop * unit,
+            ..self
+        }
+    }
 }
 
 impl Default for TouchOptions {
@@ -454,7 +481,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
     /// Like [`TouchPipeline::step`], with rapier's event handler.
     pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler) {
-        let prev = self.begin_step(&mut world.bodies, &world.colliders);
+        let unit = world.integration_parameters.length_unit;
+        let prev = self.begin_step(&mut world.bodies, &world.colliders, unit);
         world.step_with_events(&self.hooks, events);
         self.end_step(world, prev);
     }
@@ -467,10 +495,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         &mut self,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
+        length_unit: Real,
     ) -> PoseHistory {
         self.refresh_meshes(colliders);
         self.hooks.options = self.options.reconstruction;
-        self.hooks.slop = self.options.penetration_slop;
+        self.hooks.slop = self.options.in_length_unit(length_unit).penetration_slop;
         self.reconstructor.options = self.options.reconstruction;
 
         // Tools: aim the kinematic bodies at their device pose.
@@ -497,7 +526,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
 
         self.reports.clear();
         self.corrections = 0;
+        // The guard runs on the slops in rapier's length unit.
+        let options = self.options;
+        self.options = options.in_length_unit(world.integration_parameters.length_unit);
         self.guard(world);
+        self.options = options;
         let proxies: Vec<(RigidBodyHandle, Pose)> = self
             .tools
             .keys()

@@ -70,8 +70,8 @@ pub enum CompareScene {
     /// gravity scaled by [`SMALL_SCALE`] (a 5 mm box onto a 10 cm wide, 5 mm thick floor, from
     /// 3 cm), and rapier's `IntegrationParameters::length_unit` set to [`SMALL_SCALE`] on every
     /// side (rapier: the size of a typical object in world units, relative to a metre). rapier's
-    /// run is then the `cuboid` run in other units; the touch pipeline keeps its default
-    /// (absolute) tolerances. Depth and through as in the `cuboid` drop.
+    /// run is then the `cuboid` run in other units, and so is the touch pipeline's (its slops
+    /// are in that unit too). Depth and through as in the `cuboid` drop.
     SmallScale,
 }
 

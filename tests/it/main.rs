@@ -15,6 +15,7 @@ mod fig4;
 mod friction;
 mod gltf_input;
 mod grazing_drag;
+mod guard_scales;
 mod haptic_agreement;
 mod haptic_energy;
 mod haptic_servo;
