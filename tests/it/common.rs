@@ -372,3 +372,23 @@ pub mod strategies {
         vec3().prop_filter_map("non-zero", |v| v.try_normalize())
     }
 }
+
+/// The U of the drop tests as a collider shape, and its volume: a TriMesh, legs down, `2 r`
+/// wide and `1.25 r` tall, legs `r / 2` wide, extruded `2 r` (its origin where the legs' inner
+/// walls meet the bridge's underside, `r` above the legs' bottoms).
+pub fn u_collider(r: f32) -> (rapier_touch::rapier3d::prelude::ColliderBuilder, f32) {
+    let outline = [
+        [-r, -r],
+        [-0.5 * r, -r],
+        [-0.5 * r, 0.0],
+        [0.5 * r, 0.0],
+        [0.5 * r, -r],
+        [r, -r],
+        [r, 0.25 * r],
+        [-r, 0.25 * r],
+    ];
+    let (v, i) = rapier_touch::geometry::generators::extruded_polygon(&outline, 2.0 * r).unwrap();
+    let volume = (2.0 * r * 1.25 * r - r * r) * 2.0 * r;
+    let mesh = rapier_touch::rapier3d::prelude::ColliderBuilder::trimesh(v, i).unwrap();
+    (mesh, volume)
+}

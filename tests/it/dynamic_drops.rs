@@ -76,22 +76,7 @@ fn drop(body: Body, mass: f32, height: f32, k: f32, substeps: u32) -> Drop {
             let volume = 2.0 * 4.0 / 3.0 * std::f32::consts::PI * rb * rb * rb + 8.0 * r * 1e-4;
             (ColliderBuilder::compound(parts), volume)
         }
-        Body::U => {
-            let outline = [
-                [-r, -r],
-                [-0.5 * r, -r],
-                [-0.5 * r, 0.0],
-                [0.5 * r, 0.0],
-                [0.5 * r, -r],
-                [r, -r],
-                [r, 0.25 * r],
-                [-r, 0.25 * r],
-            ];
-            let (v, i) =
-                rapier_touch::geometry::generators::extruded_polygon(&outline, 2.0 * r).unwrap();
-            let volume = (2.0 * r * 1.25 * r - r * r) * 2.0 * r;
-            (ColliderBuilder::trimesh(v, i).unwrap(), volume)
-        }
+        Body::U => crate::common::u_collider(r),
     };
     let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
         0.0,

@@ -259,8 +259,9 @@ fn u_shaped_trimesh_tool_pressed_legs_down_holds_and_gets_the_pins_force() {
 
 /// A U three times the size (legs 12 cm wide, two plate cells) lowered 8 cm in two steps (5 mm
 /// a substep; the other tools here come down 0.25 mm a substep): the plate vertices its legs'
-/// bottoms pass are held and pressed out, as at a slow press. It passed on the code before this stop's fix of the inside distance
-/// too: what holds a vertex deep inside a mesh tool here was not traced.
+/// bottoms pass are held and pressed out, as at a slow press. It passed on the code before
+/// the fix of the inside distance of a mesh tool too: what holds a vertex deep inside a mesh
+/// tool here was not traced.
 #[test]
 fn a_large_u_pressed_in_two_steps_holds_and_gets_the_pins_force() {
     let k = 3.0;
