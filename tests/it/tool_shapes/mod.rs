@@ -17,6 +17,7 @@ use rapier_touch::rapier3d::prelude::*;
 use rapier_touch::surface::meshing::{plate, plate_rim};
 
 mod friction;
+mod scales;
 
 const CELLS: u32 = 16; // 1 m plate, 62.5 mm cells
 const DEPTH: f32 = 0.03;
