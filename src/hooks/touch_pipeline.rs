@@ -148,6 +148,10 @@ impl TouchOptions {
     /// use rapier_touch::prelude::*;
     /// let options = TouchOptions::default().in_length_unit(0.01);
     /// assert!((options.penetration_slop - 2e-6).abs() < 1e-12);
+    /// // A unit that is no length leaves the slops as they are.
+    /// for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+    ///     assert_eq!(TouchOptions::default().in_length_unit(bad), TouchOptions::default());
+    /// }
     /// ```
     pub fn in_length_unit(self, length_unit: Real) -> Self {
         let unit = if length_unit.is_finite() && length_unit > 0.0 {
