@@ -69,26 +69,7 @@ fn press_over(
     friction: Friction,
     ramp: usize,
 ) -> Pressed {
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
-    let mesh = plate(1.0, 1.0, CELLS, CELLS);
-    let surface = MassSpringSurfaceBuilder::from_mesh(&mesh)
-        .stiffness(50.0)
-        .damping(0.5)
-        .mass(MassDistribution::PerVertex(0.005))
-        .pinned(plate_rim(CELLS, CELLS))
-        .integrator(Integrator::EXACT)
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 8,
-        collider: true,
-    };
-    let surface = set.insert(surface, ground, &mut world, options).unwrap();
+    let (mut world, mut set, surface) = plate_world(1.0);
     let above = Vector::new(at.0, 0.05 - lowest, at.1);
     let below = Vector::new(at.0, -DEPTH - lowest, at.1);
     let body = world.insert_body(
@@ -108,6 +89,33 @@ fn press_over(
         step_to(&mut r, above.lerp(below, a), probes, step);
     }
     r
+}
+
+/// A world without gravity, its `length_unit` `s`, and the plate the tools here press: `s`
+/// wide, [`CELLS`] a side, rim pinned on a fixed body, edges of `50 s` N/m with dampers of
+/// `0.5 s`, `5 s` g a vertex, the exact filter, 8 substeps.
+fn plate_world(s: f32) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
+    let mut world = PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    };
+    world.integration_parameters.length_unit = s;
+    let ground = world.insert_body(RigidBodyBuilder::fixed());
+    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(s, s, CELLS, CELLS))
+        .stiffness(50.0 * s)
+        .damping(0.5 * s)
+        .mass(MassDistribution::PerVertex(0.005 * s))
+        .pinned(plate_rim(CELLS, CELLS))
+        .integrator(Integrator::EXACT)
+        .build()
+        .unwrap();
+    let mut set = SurfaceSet::new();
+    let options = AttachOptions {
+        substeps: 8,
+        collider: true,
+    };
+    let surface = set.insert(surface, ground, &mut world, options).unwrap();
+    (world, set, surface)
 }
 
 /// One step with the tool's body driven to `to`; after it no probe (tool frame) is below the

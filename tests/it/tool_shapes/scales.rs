@@ -10,26 +10,7 @@ use super::*;
 /// What the press at scale `s` did: the tool's force over `s²`, the pins' mismatch relative to
 /// it, the deepest vertex inside the U and the deepest U corner under the surface (over `s`).
 fn pressed_at(s: f32) -> (f32, f32, f32, f32) {
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    world.integration_parameters.length_unit = s;
-    let ground = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(s, s, CELLS, CELLS))
-        .stiffness(50.0 * s)
-        .damping(0.5 * s)
-        .mass(MassDistribution::PerVertex(0.005 * s))
-        .pinned(plate_rim(CELLS, CELLS))
-        .integrator(Integrator::EXACT)
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps: 8,
-        collider: true,
-    };
-    let surface = set.insert(surface, ground, &mut world, options).unwrap();
+    let (mut world, mut set, surface) = plate_world(s);
     let turn = Rotation::from_rotation_z(0.35) * Rotation::from_rotation_x(0.25);
     let corners: Vec<Vector> = [-0.09, -0.05, 0.05, 0.09]
         .iter()
