@@ -33,6 +33,10 @@ enum Body {
     /// A U of triangles, legs down: 0.16 s wide and 0.1 s tall, legs 0.04 s wide, extruded
     /// 0.16 s (`common::u_collider`, the U of `dynamic_drops`).
     U,
+    /// A compound: two balls of radius 0.05 s, 0.16 s apart, on a bar 0.02 s square.
+    Dumbbell,
+    /// A cylinder of radius 0.08 s, 0.08 s tall, landing on its flat end.
+    Cylinder,
 }
 
 /// A plate of side `s` (16 × 16 cells, rim pinned, 0.5 s³ kg, edges of 100 s³ N/m with
@@ -42,7 +46,7 @@ fn drop(s: f32, substeps: u32) -> Scaled {
     drop_body(Body::Ball, s, substeps)
 }
 
-/// [`drop`] with `body` (0.1 s³ kg; its lowest point 0.3 s above the plate).
+/// [`drop`] with `body` (0.1 s³ kg; its centre 0.38 s above the plate).
 fn drop_body(body_kind: Body, s: f32, substeps: u32) -> Scaled {
     let (mass, k) = (0.1 * s * s * s, 100.0 * s * s * s);
     let mut world = PhysicsWorld::default();
@@ -75,6 +79,20 @@ fn drop_body(body_kind: Body, s: f32, substeps: u32) -> Scaled {
         ),
         Body::Cube => (ColliderBuilder::cuboid(r, r, r), 8.0 * r * r * r),
         Body::U => crate::common::u_collider(r),
+        Body::Dumbbell => {
+            let rb = 0.625 * r;
+            let parts = vec![
+                (Pose::translation(-r, 0.0, 0.0), SharedShape::ball(rb)),
+                (Pose::translation(r, 0.0, 0.0), SharedShape::ball(rb)),
+                (Pose::IDENTITY, SharedShape::cuboid(r, 0.125 * r, 0.125 * r)),
+            ];
+            let volume = 2.0 * 4.0 / 3.0 * std::f32::consts::PI * rb * rb * rb;
+            (ColliderBuilder::compound(parts), volume)
+        }
+        Body::Cylinder => (
+            ColliderBuilder::cylinder(0.5 * r, r),
+            std::f32::consts::PI * r * r * r,
+        ),
     };
     let ball = world.insert_collider(shape.density(mass / volume), Some(body));
     set.add_tool(ball, &mut world).unwrap();
@@ -125,14 +143,15 @@ fn a_ball_drops_onto_a_plate_alike_at_every_scale() {
     }
 }
 
-/// A cube landing flat and a U of triangles landing on its legs, as the ball above: the same
-/// landing in units of the scale at 0.1 mm, 1 cm, 100 m and 10 km as at 1 m, carried, and no
-/// rebound faster than the impact. (A cube 16 µm across went through the plate, and a U
-/// 1.6 mm across at 17 substeps, while parry's contact with the plate's triangles was asked at
-/// the tool's own size: its GJK's absolute tolerance is then many times the contact margin.)
+/// A cube landing flat, a U of triangles landing on its legs, a dumbbell (a compound) and a
+/// cylinder on its end, as the ball above: the same landing in units of the scale at 0.1 mm,
+/// 1 cm, 100 m and 10 km as at 1 m, carried, and no rebound faster than the impact. (A cube
+/// 16 µm across went through the plate, and a U 1.6 mm across at 17 substeps, while parry's
+/// contact with the plate's triangles was asked at the tool's own size: its GJK's absolute
+/// tolerance is then many times the contact margin.)
 #[test]
-fn a_cube_and_a_u_drop_onto_a_plate_alike_at_every_scale() {
-    for body in [Body::Cube, Body::U] {
+fn cubes_us_dumbbells_and_cylinders_drop_onto_a_plate_alike_at_every_scale() {
+    for body in [Body::Cube, Body::U, Body::Dumbbell, Body::Cylinder] {
         for substeps in [1, 17] {
             let reference = drop_body(body, 1.0, substeps);
             for s in [1e-4, 1e-2, 1e2, 1e4] {
