@@ -87,7 +87,8 @@ const NEAR_VERTEX: Real = 0.1;
 /// inside one triangle, snapped onto its edge, and the shallower point the triangle beyond
 /// gives on that edge alternated from substep to substep as the first found, the normal
 /// turning 0.7° each time: a dumbbell resting across two edges gained energy and slid off).
-/// Shapes parry's contact query does not support give none.
+/// Shapes parry's contact query does not support give none. `unit_copy`: the tool's shape
+/// scaled to unit size and the factor, where parry's query is asked ([`contact`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn triangle_contacts(
     shape: &dyn parry3d::shape::Shape,
@@ -102,7 +103,7 @@ pub(crate) fn triangle_contacts(
     ),
     vertex_depth: impl Fn(u32) -> Option<Real>,
     (margin, slop): (Real, Real),
-    unit: Option<(Real, &dyn parry3d::shape::Shape)>,
+    unit_copy: Option<(Real, &dyn parry3d::shape::Shape)>,
     contacts: &mut Vec<SurfaceContact>,
     tool_velocities: &mut Vec<Vector>,
 ) {
@@ -128,7 +129,7 @@ pub(crate) fn triangle_contacts(
             .map(|&v| velocity(v).length())
             .fold(0.0, Real::max);
         let reach = 2.0 * h * (tool(centroid).length() + own) + margin;
-        let Some(c) = contact(shape, pose, &tri, reach, unit) else {
+        let Some(c) = contact(shape, pose, &tri, reach, unit_copy) else {
             continue;
         };
         let (_, location) = tri.project_local_point_and_get_location(c.point2, false);

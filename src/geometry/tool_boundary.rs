@@ -426,9 +426,15 @@ pub(crate) fn distance_outside(shape: &dyn parry3d::shape::Shape, pose: &Pose, p
     }
     // A triangle mesh's projection of a point inside (an oriented mesh's) is the nearest
     // boundary point, not the point itself, and parry's solid distance is the distance to it:
-    // a surface vertex 1.3 mm inside a U's leg read 1.3 mm outside. Inside is asked first.
-    if shape.as_trimesh().is_some() && shape.contains_point(pose, p) {
-        return 0.0;
+    // a surface vertex 1.3 mm inside a U's leg read 1.3 mm outside. The projection says
+    // whether the point is inside.
+    if shape.as_trimesh().is_some() {
+        let proj = shape.project_point(pose, p, true);
+        return if proj.is_inside {
+            0.0
+        } else {
+            (proj.point - p).length()
+        };
     }
     let gjk = shape.distance_to_point(pose, p, true);
     match shape.as_convex_polyhedron() {

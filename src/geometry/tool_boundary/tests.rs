@@ -335,9 +335,9 @@ fn a_mesh_point_takes_its_own_faces_normal() {
 
 /// A point inside a closed triangle mesh (oriented, as the coupling's query shape is) is no
 /// distance outside it, and one outside is its distance from the mesh: a U, at scales from
-/// 0.1 mm to 1 km, against the
-/// distances written here. (Inside a mesh it read the distance to the nearest face: parry's
-/// solid distance for a mesh is the distance to its projection, the boundary.)
+/// 0.1 mm to 1 km, against the distances written here. (Inside a mesh it read the distance
+/// to the nearest face: parry's solid distance for a mesh is the distance to its projection,
+/// the boundary.)
 #[test]
 fn a_point_inside_a_closed_mesh_is_no_distance_outside() {
     use parry3d::shape::{SharedShape, TriMeshFlags};
