@@ -33,9 +33,9 @@ fn setup(
     semantic: Semantic,
     speed: f32,
     hook_flags: bool,
+    s: f32,
 ) -> (PhysicsWorld, RigidBodyHandle, [ColliderHandle; 2]) {
-    let mut w = PhysicsWorld::default();
-    TouchPipeline::configure(&mut w.integration_parameters);
+    let mut w = scaled_world(s);
     let mut hooks = if hook_flags {
         ActiveHooks::MODIFY_SOLVER_CONTACTS
     } else {
@@ -44,8 +44,8 @@ fn setup(
     if matches!(semantic, Semantic::UserFilter) {
         hooks |= ActiveHooks::FILTER_CONTACT_PAIRS;
     }
-    let mut floor = ColliderBuilder::cuboid(5.0, 0.05, 5.0).active_hooks(hooks);
-    let mut body = ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(hooks);
+    let mut floor = ColliderBuilder::cuboid(5.0 * s, 0.05 * s, 5.0 * s).active_hooks(hooks);
+    let mut body = ColliderBuilder::cuboid(0.25 * s, 0.25 * s, 0.25 * s).active_hooks(hooks);
     let (g1, g2) = (
         InteractionGroups::new(Group::GROUP_1, Group::GROUP_1, InteractionTestMode::And),
         InteractionGroups::new(Group::GROUP_2, Group::GROUP_2, InteractionTestMode::And),
@@ -71,16 +71,30 @@ fn setup(
     let fh = w.insert_collider(floor, None);
     let b = w.insert_body(
         RigidBodyBuilder::dynamic()
-            .translation(Vector::new(0.0, 1.0, 0.0))
-            .linvel(Vector::new(0.0, -speed, 0.0)),
+            .translation(Vector::new(0.0, s, 0.0))
+            .linvel(Vector::new(0.0, -speed * s, 0.0)),
     );
     let bh = w.insert_collider(body, Some(b));
     (w, b, [fh, bh])
 }
 
-fn final_y(semantic: Semantic, speed: f32, mode: Option<bool>) -> f32 {
+/// A world at scale `s`: rapier's `length_unit` set to `s` (as its docs ask), gravity scaled
+/// by `s`, the crate's integration parameters.
+fn scaled_world(s: f32) -> PhysicsWorld {
+    let mut w = PhysicsWorld::default();
+    w.integration_parameters.length_unit = s;
+    w.gravity *= s;
+    TouchPipeline::configure(&mut w.integration_parameters);
+    w
+}
+
+/// The scales the semantics are checked at: 0.1 mm to 10 km.
+const SCALES: [f32; 5] = [1e-4, 1e-2, 1.0, 1e2, 1e4];
+
+/// The body's height at the end, in units of `s`.
+fn final_y(semantic: Semantic, speed: f32, mode: Option<bool>, s: f32) -> f32 {
     let hook_flags = mode.unwrap_or(true);
-    let (mut w, b, handles) = setup(semantic, speed, hook_flags);
+    let (mut w, b, handles) = setup(semantic, speed, hook_flags, s);
     let filter = matches!(semantic, Semantic::UserFilter);
     match mode {
         None => {
@@ -102,7 +116,7 @@ fn final_y(semantic: Semantic, speed: f32, mode: Option<bool>) -> f32 {
             }
         }
     }
-    w.bodies[b].translation().y
+    w.bodies[b].translation().y / s
 }
 
 /// `RefuseAll` when `.0`, no hooks otherwise.
@@ -129,17 +143,18 @@ fn bodies_pass_whatever_rapier_lets_them_pass() {
         Semantic::UserFilter,
         Semantic::CollisionTypes,
     ] {
-        for speed in [2.0, 60.0] {
-            let vanilla = final_y(semantic, speed, None);
+        for (speed, s) in [2.0, 60.0].into_iter().flat_map(|v| SCALES.map(|s| (v, s))) {
+            let vanilla = final_y(semantic, speed, None, s);
             assert!(
                 vanilla < -1.0,
-                "{semantic:?} {speed}: vanilla rapier stops the body at {vanilla}"
+                "{semantic:?} {speed} s/s at {s} m: vanilla rapier stops the body at {vanilla} s"
             );
             for hook_flags in [true, false] {
-                let ours = final_y(semantic, speed, Some(hook_flags));
+                let ours = final_y(semantic, speed, Some(hook_flags), s);
                 if (ours - vanilla).abs() > 1e-5 {
                     failures.push(format!(
-                        "{semantic:?} {speed} m/s hooks {hook_flags}: y {ours} vs vanilla {vanilla}"
+                        "{semantic:?} {speed} s/s at {s} m, hooks {hook_flags}: y {ours} s vs \
+                         vanilla {vanilla} s"
                     ));
                 }
             }
@@ -327,19 +342,18 @@ impl PhysicsHooks for OneWay {
 /// above, it stops on the platform.
 #[test]
 fn a_one_way_platform_in_the_users_hooks_is_passed_from_below_only() {
-    let run = |start_y: f32, vy: f32, mode: Option<bool>| -> f32 {
-        let mut w = PhysicsWorld::default();
-        TouchPipeline::configure(&mut w.integration_parameters);
+    let run = |start_y: f32, vy: f32, mode: Option<bool>, s: f32| -> f32 {
+        let mut w = scaled_world(s);
         let hook = ActiveHooks::MODIFY_SOLVER_CONTACTS;
         // The platform needs the flag for the user's hooks in every mode.
         let platform = w.insert_collider(
-            ColliderBuilder::cuboid(5.0, 0.05, 5.0).active_hooks(hook),
+            ColliderBuilder::cuboid(5.0 * s, 0.05 * s, 5.0 * s).active_hooks(hook),
             None,
         );
         let b = w.insert_body(
             RigidBodyBuilder::dynamic()
-                .translation(Vector::new(0.0, start_y, 0.0))
-                .linvel(Vector::new(0.0, vy, 0.0)),
+                .translation(Vector::new(0.0, start_y * s, 0.0))
+                .linvel(Vector::new(0.0, vy * s, 0.0)),
         );
         let flags = if mode == Some(true) {
             hook
@@ -347,7 +361,7 @@ fn a_one_way_platform_in_the_users_hooks_is_passed_from_below_only() {
             ActiveHooks::empty()
         };
         let bc = w.insert_collider(
-            ColliderBuilder::cuboid(0.25, 0.25, 0.25).active_hooks(flags),
+            ColliderBuilder::cuboid(0.25 * s, 0.25 * s, 0.25 * s).active_hooks(flags),
             Some(b),
         );
         let hooks = OneWay { platform };
@@ -361,25 +375,27 @@ fn a_one_way_platform_in_the_users_hooks_is_passed_from_below_only() {
                 Some(_) => touch.step(&mut w),
             }
         }
-        w.bodies[b].translation().y
+        w.bodies[b].translation().y / s
     };
-    for (start_y, vy) in [(-1.0, 6.0), (-1.0, 60.0)] {
-        let vanilla = run(start_y, vy, None);
-        // Slow: back down and resting on top; fast: far above.
-        assert!(vanilla > 0.25, "vanilla ended at {vanilla}");
+    for s in SCALES {
+        for (start_y, vy) in [(-1.0, 6.0), (-1.0, 60.0)] {
+            let vanilla = run(start_y, vy, None, s);
+            // Slow: back down and resting on top; fast: far above.
+            assert!(vanilla > 0.25, "{s} m: vanilla ended at {vanilla} s");
+            for mode in [Some(true), Some(false)] {
+                let y = run(start_y, vy, mode, s);
+                assert!(
+                    (y - vanilla).abs() <= 2e-3 * vanilla.abs().max(1.0),
+                    "{vy} s/s at {s} m, {mode:?}: {y} s, vanilla {vanilla} s"
+                );
+            }
+        }
         for mode in [Some(true), Some(false)] {
-            let y = run(start_y, vy, mode);
+            let y = run(3.0, -60.0, mode, s);
             assert!(
-                (y - vanilla).abs() <= 2e-3 * vanilla.abs().max(1.0),
-                "{vy} m/s {mode:?}: {y}, vanilla {vanilla}"
+                y > 0.25 && y < 0.35,
+                "{s} m, {mode:?}: dropped from above ended at {y} s"
             );
         }
-    }
-    for mode in [Some(true), Some(false)] {
-        let y = run(3.0, -60.0, mode);
-        assert!(
-            y > 0.25 && y < 0.35,
-            "{mode:?}: dropped from above ended at {y}"
-        );
     }
 }
