@@ -493,13 +493,16 @@ fn register(
 
 /// The start-of-step records (body and tool poses), then the haptic tools to their proxies.
 fn before_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
-    let Ok((sim, mut colliders, _, mut bodies, _)) = context.single_mut() else {
+    let Ok((sim, mut colliders, joints, mut bodies, _)) = context.single_mut() else {
         return;
     };
     let touch = &mut *touch;
+    // bevy_rapier's user hooks are a system parameter this system does not see.
     touch.surfaces.take_coming_tools(
         &bodies.bodies,
         &mut colliders.colliders,
+        (&joints.impulse_joints, &joints.multibody_joints),
+        &touch.pipeline.hooks.inner,
         sim.integration_parameters.dt,
     );
     touch.prev = Some(touch.pipeline.begin_step(

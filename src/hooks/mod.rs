@@ -25,7 +25,7 @@
 //!   hooks alike.
 
 mod events;
-mod pair_filter;
+pub(crate) mod pair_filter;
 mod pose_history;
 mod report;
 mod sets;

@@ -480,7 +480,17 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// assert!(surfaces.tool_reaction(tool).unwrap().force.y > 0.0); // the plate pushes back
     /// ```
     pub fn step_with_surfaces(&mut self, world: &mut PhysicsWorld, surfaces: &mut SurfaceSet) {
-        surfaces.step_with(world, |w| self.step(w));
+        // The surfaces' coming tools are taken as rapier pairs them, the user's hooks asked.
+        let joints = (&world.impulse_joints, &world.multibody_joints);
+        let dt = world.integration_parameters.dt;
+        surfaces.take_coming_tools(
+            &world.bodies,
+            &mut world.colliders,
+            joints,
+            &self.hooks.inner,
+            dt,
+        );
+        surfaces.step_taken(world, |w| self.step(w));
     }
 
     /// Like [`TouchPipeline::step`], with rapier's event handler.

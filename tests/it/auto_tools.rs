@@ -206,3 +206,74 @@ fn auto_tools_need_a_collider_and_a_surface() {
         Err(CouplingError::NoSuchSurface)
     );
 }
+
+/// The user's hooks: refuse every pair that involves `collider`.
+struct Refuse(ColliderHandle);
+
+impl PhysicsHooks for Refuse {
+    fn filter_contact_pair(&self, c: &PairFilterContext) -> Option<SolverFlags> {
+        (c.collider1 != self.0 && c.collider2 != self.0).then(SolverFlags::default)
+    }
+}
+
+/// More of rapier's rules, as the step guard asks them (`rapier_semantics.rs`): a box whose
+/// `ActiveCollisionTypes` and the plate's collider's leave dynamic-fixed pairs out, a box on a
+/// joint with contacts disabled to the plate's body, and a box the user's
+/// `filter_contact_pair` refuses (the surfaces stepped through the touch pipeline with the
+/// user's hooks) fall through the plate as in vanilla rapier and are not taken as tools; a
+/// plain box beside them is.
+#[test]
+fn collision_types_joints_and_the_users_filter_are_kept() {
+    let (mut world, mut set, h) = auto_plate();
+    let half = 0.05;
+    let cuboid = || ColliderBuilder::cuboid(half, half, half);
+    let plate = set.get(h).unwrap().collider().unwrap();
+    let types = ActiveCollisionTypes::default() - ActiveCollisionTypes::DYNAMIC_FIXED;
+    world.colliders[plate].set_active_collision_types(types);
+    let no_types = drop_box(
+        &mut world,
+        half,
+        0.2,
+        0.3,
+        cuboid().active_collision_types(types),
+    );
+    let jointed = drop_box(&mut world, half, 0.2, 0.3, cuboid());
+    let plate_body = world.colliders[plate].parent().unwrap();
+    let joint = RopeJointBuilder::new(10.0).contacts_enabled(false);
+    world.insert_impulse_joint(plate_body, jointed.0, joint);
+    let refused = drop_box(
+        &mut world,
+        half,
+        0.2,
+        0.3,
+        cuboid().active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS),
+    );
+    let plain = drop_box(&mut world, half, 0.2, 0.3, cuboid());
+    // Apart along the plate's middle.
+    for ((b, _), x) in [no_types, jointed, refused, plain]
+        .into_iter()
+        .zip([-0.3, -0.1, 0.1, 0.3])
+    {
+        world.bodies[b].set_translation(Vector::new(x, 0.3, -0.02), true);
+    }
+    let mut touch = TouchPipeline::new(Refuse(refused.1));
+    for _ in 0..90 {
+        touch.step_with_surfaces(&mut world, &mut set);
+    }
+    let mut failures = Vec::new();
+    for (name, (body, c)) in [("types", no_types), ("joint", jointed), ("filter", refused)] {
+        let y = world.bodies[body].translation().y;
+        if set.tool_reaction(c).is_some() || y >= -0.5 {
+            failures.push(format!(
+                "{name}: held at {y} m, taken {}",
+                set.tool_reaction(c).is_some()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(
+        set.tool_reaction(plain.1).is_some(),
+        "the plain box not taken"
+    );
+    assert!(world.bodies[plain.0].translation().y > -0.3);
+}

@@ -2,8 +2,10 @@
 //! no registration ([`SurfaceSet::set_auto_tools`]).
 
 use super::*;
+use crate::hooks::pair_filter::rapier_solves_pair;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use rapier3d::dynamics::RigidBodySet;
+use rapier3d::dynamics::{ImpulseJointSet, MultibodyJointSet, RigidBodySet};
+use rapier3d::pipeline::PhysicsHooks;
 
 impl SurfaceSet {
     /// Makes surface `h` treat every dynamic body that comes at its collider as a tool (`on`),
@@ -14,12 +16,17 @@ impl SurfaceSet {
     /// surface's collider's becomes a tool, as [`SurfaceSet::add_tool`] would make it: rapier
     /// stops solving its contact with the surfaces' colliders, and the surfaces press it
     /// instead, coupled implicitly (a dropped box dents the surface). rapier's rules for the
-    /// pair are kept: a sensor, a disabled collider, one whose collision groups leave the
-    /// surface's collider out, or one whose solver groups leave out [`SURFACE_SOLVER_GROUP`]
-    /// (no rigid response wanted from surfaces) is not taken. A tool taken this way is given
-    /// back (as [`SurfaceSet::remove_tool`]) once its bounds are clear of every such surface
-    /// and it touches none; one you register yourself is yours. The user's
-    /// `PhysicsHooks::filter_contact_pair` is not asked.
+    /// pair are kept, asked as the step guard asks them: a sensor, a disabled collider, one
+    /// whose collision groups leave the surface's collider out, one whose
+    /// `ActiveCollisionTypes` and the surface collider's both leave its pair out, one on a
+    /// joint with contacts disabled to the surface's body, or one whose solver groups leave
+    /// out [`SURFACE_SOLVER_GROUP`] (no rigid response wanted from surfaces) is not taken;
+    /// nor, when the surfaces are stepped through
+    /// [`crate::hooks::TouchPipeline::step_with_surfaces`], is a pair the pipeline's user
+    /// hooks refuse in `PhysicsHooks::filter_contact_pair` ([`SurfaceSet::step`] has no user
+    /// hooks; the bevy plugin does not ask bevy_rapier's). A tool taken this way is given back
+    /// (as [`SurfaceSet::remove_tool`]) once its bounds are clear of every such surface and it
+    /// touches none; one you register yourself is yours.
     ///
     /// # Errors
     /// [`CouplingError::NoSuchSurface`]; [`CouplingError::NoCollider`] for a surface attached
@@ -67,22 +74,31 @@ impl SurfaceSet {
     /// Takes the dynamic bodies coming at the surfaces of [`SurfaceSet::set_auto_tools`] as
     /// tools, and gives back those it took that are clear of them (before a rigid step of
     /// `dt`; for engines that own the step, with [`SurfaceSet::step_with`]'s other parts).
+    ///
+    /// Whether rapier would solve a body's contact with a surface's collider is asked as the
+    /// step guard asks it (`crate::hooks::pair_filter::rapier_solves_pair`: sensors, disabled
+    /// colliders, joints with contacts disabled, `ActiveCollisionTypes`, collision and solver
+    /// groups, and `hooks`' `filter_contact_pair`), for the bodies not yet taken; one taken
+    /// stays near while its bounds meet the surface's and its collision groups allow the pair
+    /// (its solver groups are the crate's while it is a tool).
     pub(crate) fn take_coming_tools(
         &mut self,
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
+        joints: (&ImpulseJointSet, &MultibodyJointSet),
+        hooks: &dyn PhysicsHooks,
         dt: Real,
     ) {
-        let surfaces: Vec<(Aabb, InteractionGroups)> = self
+        let surfaces: Vec<(Aabb, ColliderHandle)> = self
             .entries
             .iter()
             .filter_map(|e| e.1.as_ref())
             .filter(|s| s.auto_tools)
             .filter_map(|s| {
-                let c = colliders.get(s.collider?)?;
-                let aabb = c.compute_aabb();
+                let handle = s.collider?;
+                let aabb = colliders.get(handle)?.compute_aabb();
                 let margin = 1e-3 * aabb.extents().max_element();
-                Some((aabb.loosened(margin), c.collision_groups()))
+                Some((aabb.loosened(margin), handle))
             })
             .collect();
         if surfaces.is_empty() && self.auto.is_empty() {
@@ -107,8 +123,16 @@ impl SurfaceSet {
                 let swept = c
                     .compute_aabb()
                     .merged(&c.shape().compute_aabb(&(next * *local)));
-                let meets = surfaces.iter().any(|(aabb, groups)| {
-                    c.collision_groups().test(*groups) && aabb.intersects(&swept)
+                let taken = self.tools.contains_key(&ch);
+                let meets = surfaces.iter().any(|&(aabb, surface)| {
+                    aabb.intersects(&swept)
+                        && if taken {
+                            colliders
+                                .get(surface)
+                                .is_some_and(|s| c.collision_groups().test(s.collision_groups()))
+                        } else {
+                            rapier_solves_pair(bodies, colliders, joints, hooks, surface, ch, false)
+                        }
                 });
                 if meets {
                     near.insert(ch);

@@ -86,7 +86,18 @@ impl SurfaceSet {
         rigid_step: impl FnOnce(&mut PhysicsWorld),
     ) {
         let dt = world.integration_parameters.dt;
-        self.take_coming_tools(&world.bodies, &mut world.colliders, dt);
+        let joints = (&world.impulse_joints, &world.multibody_joints);
+        self.take_coming_tools(&world.bodies, &mut world.colliders, joints, &(), dt);
+        self.step_taken(world, rigid_step);
+    }
+
+    /// [`SurfaceSet::step_with`] after the coming tools were taken
+    /// ([`SurfaceSet::take_coming_tools`], with the caller's user hooks).
+    pub(crate) fn step_taken(
+        &mut self,
+        world: &mut PhysicsWorld,
+        rigid_step: impl FnOnce(&mut PhysicsWorld),
+    ) {
         self.begin_step(&world.colliders);
         self.drive_haptic_tools(&mut world.bodies, &mut world.colliders);
         rigid_step(world);
