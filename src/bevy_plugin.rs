@@ -510,7 +510,9 @@ fn before_step(mut touch: ResMut<TouchWorld>, mut context: ContextQuery) {
         &colliders.colliders,
         sim.integration_parameters.length_unit,
     ));
-    touch.surfaces.begin_step(&colliders.colliders);
+    touch
+        .surfaces
+        .begin_step(&mut bodies.bodies, &colliders.colliders);
     touch
         .surfaces
         .drive_haptic_tools(&mut bodies.bodies, &mut colliders.colliders);

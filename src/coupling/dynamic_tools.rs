@@ -3,8 +3,10 @@
 //! surface's in the same substep instead of a force handed to it a rigid step later.
 //!
 //! Over a rigid step, rapier moves the body first (gravity, the user's forces, its other
-//! contacts). Each surface then replays the step in its substeps from the body's pose at the
-//! start with rapier's new velocity: before each substep the body is the surface's holder at
+//! contacts, and the surfaces' support of the last step as a force: [`Fed`]). Each surface
+//! then replays the step in its substeps from the body's pose and velocities at the start,
+//! what rapier's step changed of them (less the support) added a substep at a time
+//! ([`DynamicTool::new`]): before each substep the body is the surface's holder at
 //! its current velocity, the step's solve gives it the surface's impulses, and it moves on with
 //! the velocity they leave. The points it will meet in the next substep are pressed at its
 //! pose then: surface vertices it holds or will reach (speculative contacts: such a point may
@@ -23,7 +25,7 @@ use crate::math::{Matrix, Pose, Real, Rotation, Vector};
 use crate::surface::{MassSpringSurface, RigidHolder};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::shape::Shape;
-use rapier3d::dynamics::RigidBodyHandle;
+use rapier3d::dynamics::{IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use rapier3d::geometry::ColliderHandle;
 use rapier3d::pipeline::PhysicsWorld;
 
@@ -44,12 +46,18 @@ pub(super) struct DynamicTool {
     /// Inverse mass per world axis (zero on locked axes) and world inverse inertia.
     inverse_mass: Vector,
     inverse_inertia: Matrix,
-    /// The gravity on it (the world's, scaled by its gravity scale; zero when asleep).
-    gravity: Vector,
+    /// What rapier's step did to its velocities besides the surfaces' support ([`Fed`]), per
+    /// second (gravity, the user's forces, its other contacts and joints): the substeps add it
+    /// a substep at a time ([`Self::fall`]).
+    acceleration: Vector,
+    angular_acceleration: Vector,
     /// Whether a surface gave it an impulse in this rigid step.
     pub touched: bool,
     /// How far it may overlap the surface without being pushed out ([`SLOP`] of its size).
     pub slop: Real,
+    /// The impulses it took ([`Self::take`]) and their moments about the centre of mass.
+    pub impulse: Vector,
+    pub angular_impulse: Vector,
 }
 
 /// A dynamic tool's allowed overlap with a surface, as a fraction of its size: within it a
@@ -59,11 +67,22 @@ pub(super) const SLOP: Real = 1e-3;
 
 impl DynamicTool {
     /// The tool on collider `collider` if its body is dynamic: at `start` (the collider's pose
-    /// before the rigid step) with the velocity rapier gave the body in it, less the gravity
-    /// rapier added (the substeps add it back a substep at a time, [`Self::fall`]: added at
-    /// once, a body resting on a surface was knocked down at the start of every rigid step and
-    /// pushed back up through its substeps, a millimetre's bounce at 60 Hz).
-    pub fn new(world: &PhysicsWorld, collider: ColliderHandle, start: Pose) -> Option<Self> {
+    /// before the rigid step) with its velocities then (`fed`, recorded before rapier's step),
+    /// and what rapier's step changed of them, less the support `fed` to its body, as an
+    /// acceleration the substeps add a substep at a time ([`Self::fall`]). Added at once,
+    /// gravity knocked a body resting on a surface down at the start of every rigid step, to be
+    /// pushed back up through the substeps (a millimetre's bounce at 60 Hz); and the contact of
+    /// a box stacked on it struck it down by the upper box's weight times the step, the surface
+    /// threw it back up, and rapier's next step carried that velocity to the box above: the
+    /// pair kept a velocity of 1.4 cm/s upward at rest, and the upper box drifted off sideways.
+    /// A body with no record (asleep then) starts from rapier's new velocity less gravity and
+    /// the support.
+    pub fn new(
+        world: &PhysicsWorld,
+        collider: ColliderHandle,
+        start: Pose,
+        fed: &[Fed],
+    ) -> Option<Self> {
         let c = world.colliders.get(collider)?;
         let body = c.parent()?;
         let b = world.bodies.get(body)?;
@@ -84,27 +103,58 @@ impl DynamicTool {
             world.gravity * b.gravity_scale()
         };
         let dt = world.integration_parameters.dt;
+        let (force, torque) = fed
+            .iter()
+            .filter(|f| f.body == body)
+            .fold((Vector::ZERO, Vector::ZERO), |(f, t), fed| {
+                (f + fed.force, t + fed.torque)
+            });
+        let support = (m.effective_inv_mass * force, inverse_inertia * torque);
+        let before = fed.iter().find(|f| f.body == body);
+        let (linvel, angvel, acceleration, angular_acceleration) = match before {
+            Some(f) if dt > 0.0 && !b.is_sleeping() => {
+                let (v0, w0) = capped(&world.integration_parameters, f, b.angvel());
+                (
+                    v0,
+                    w0,
+                    (b.linvel() - v0) / dt - support.0,
+                    (b.angvel() - w0) / dt - support.1,
+                )
+            }
+            _ => (
+                b.linvel() - (gravity + support.0) * dt,
+                b.angvel() - support.1 * dt,
+                gravity,
+                Vector::ZERO,
+            ),
+        };
         let tool = DynamicTool {
             collider,
             body,
             local,
             pose: start * local.inverse(),
             local_com: m.local_mprops.local_com,
-            linvel: b.linvel() - gravity * dt,
-            angvel: b.angvel(),
+            linvel,
+            angvel,
             inverse_mass: m.effective_inv_mass,
             inverse_inertia,
-            gravity,
+            acceleration,
+            angular_acceleration,
             touched: false,
             slop: SLOP * c.compute_aabb().extents().max_element(),
+            impulse: Vector::ZERO,
+            angular_impulse: Vector::ZERO,
         };
-        (tool.pose.is_finite() && tool.linvel.is_finite() && tool.angvel.is_finite())
-            .then_some(tool)
+        let finite = [tool.linvel, tool.angvel, acceleration, angular_acceleration]
+            .iter()
+            .all(|v| v.is_finite());
+        (tool.pose.is_finite() && finite).then_some(tool)
     }
 
-    /// Gravity's velocity over `h` seconds.
+    /// The velocities rapier's step adds over `h` seconds of it ([`Self::new`]).
     pub fn fall(&mut self, h: Real) {
-        self.linvel += self.gravity * h;
+        self.linvel += self.acceleration * h;
+        self.angvel += self.angular_acceleration * h;
     }
 
     /// Free motion over `n` substeps of `h`: falling and moving on.
@@ -159,6 +209,8 @@ impl DynamicTool {
         if impulse != Vector::ZERO || angular != Vector::ZERO {
             self.touched = true;
         }
+        self.impulse += impulse;
+        self.angular_impulse += angular;
         self.linvel += self.inverse_mass * impulse;
         self.angvel += self.inverse_inertia * angular;
     }
@@ -167,6 +219,115 @@ impl DynamicTool {
     pub fn centre(&self) -> Vector {
         self.pose.transform_point(self.local_com)
     }
+}
+
+/// The surfaces' support of a dynamic tool, handed to rapier as a force on its body for one
+/// rigid step (added before it, taken off after it).
+///
+/// The surfaces replay a rigid step's motion of a tool they touch from rapier's new velocity.
+/// Without the support, rapier moved the tool as if nothing held it: a box resting on a
+/// surface fell freely in rapier's step, and a box stacked on it was pushed back by only its
+/// share of their contact (half, between equal boxes), the other half going into the lower
+/// box's fall, which the surfaces' replay then undid. The upper box sank into the lower one at
+/// a steady 0.3 m/s until the two were one (three 12 cm boxes stacked on a soft plate ended at
+/// the same height). With the surfaces' impulse of the last step as a force, rapier's step
+/// holds the lower box as the surfaces will, and the contact above it is solved against a
+/// supported body. The replay takes the support back out of rapier's velocity
+/// ([`DynamicTool::new`]): what the body itself does is still decided by the surfaces, in the
+/// same substep (implicitly), so a lone body moves as without it.
+///
+/// Every awake dynamic tool's body gets a record, support or none: its velocities before
+/// rapier's step, from which the replay starts ([`DynamicTool::new`]).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Fed {
+    pub body: RigidBodyHandle,
+    force: Vector,
+    torque: Vector,
+    /// The body's user force and torque before: restored as they were.
+    user_force: Vector,
+    user_torque: Vector,
+    /// The body's velocities before rapier's step.
+    linvel: Vector,
+    angvel: Vector,
+}
+
+impl Fed {
+    /// Records an awake dynamic `body` before the coming rigid step and adds `(force, torque)`
+    /// (torque about the centre of mass, world) to it for that step (none if not finite).
+    pub fn add(
+        bodies: &mut RigidBodySet,
+        body: RigidBodyHandle,
+        (force, torque): (Vector, Vector),
+    ) -> Option<Self> {
+        let b = bodies.get_mut(body)?;
+        if !b.is_dynamic() || b.is_sleeping() {
+            return None;
+        }
+        let (force, torque) = if force.is_finite() && torque.is_finite() {
+            (force, torque)
+        } else {
+            (Vector::ZERO, Vector::ZERO)
+        };
+        let fed = Fed {
+            body,
+            force,
+            torque,
+            user_force: b.user_force(),
+            user_torque: b.user_torque(),
+            linvel: b.linvel(),
+            angvel: b.angvel(),
+        };
+        if force == Vector::ZERO && torque == Vector::ZERO {
+            return Some(fed);
+        }
+        b.add_force(force, false);
+        b.add_torque(torque, false);
+        Some(fed)
+    }
+
+    /// Takes the support off the body after rapier's step: the user's own force and torque
+    /// exactly as they were, or, if something changed them since, less the support.
+    pub fn remove(&self, bodies: &mut RigidBodySet) {
+        let Some(b) = bodies.get_mut(self.body) else {
+            return;
+        };
+        if self.force == Vector::ZERO && self.torque == Vector::ZERO {
+            return;
+        }
+        if b.user_force() == self.user_force + self.force
+            && b.user_torque() == self.user_torque + self.torque
+        {
+            b.reset_forces(false);
+            b.reset_torques(false);
+            b.add_force(self.user_force, false);
+            b.add_torque(self.user_torque, false);
+        } else {
+            b.add_force(-self.force, false);
+            b.add_torque(-self.torque, false);
+        }
+    }
+}
+
+/// The velocities `fed` recorded before rapier's step, capped as rapier's step caps them (at
+/// `max_linear_velocity`, and at a quarter turn per step unless the body turns faster after
+/// the step: fast rotation allowed): a cap is an instant change, started from, not spread over
+/// the substeps (a ball thrown at 10³⁰ m/s crossed the plate in the first substep).
+fn capped(params: &IntegrationParameters, fed: &Fed, angvel_after: Vector) -> (Vector, Vector) {
+    let cap = |v: Vector, max: Real| {
+        let n = v.length();
+        if n > max && max > 0.0 {
+            v * (max / n)
+        } else {
+            v
+        }
+    };
+    let max_turn = std::f32::consts::FRAC_PI_4 * params.inv_dt();
+    let turn = if angvel_after.length() > max_turn * 1.001 {
+        fed.angvel
+    } else {
+        cap(fed.angvel, max_turn)
+    };
+    (cap(fed.linvel, params.max_linear_velocity()), turn)
 }
 
 /// What one or more surfaces changed of a dynamic tool's motion over a rigid step: against

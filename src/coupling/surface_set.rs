@@ -1,6 +1,6 @@
 //! [`SurfaceSet`]: soft surfaces attached to rapier bodies, pressed by rigid tools.
 
-use super::dynamic_tools::{press_ahead, DynamicTool, MotionChange};
+use super::dynamic_tools::{press_ahead, DynamicTool, Fed, MotionChange};
 use super::events::{ToolTouchEvent, TouchTracker};
 use super::friction::{Friction, Sticks};
 use super::haptic_links::LinkState;
@@ -227,6 +227,10 @@ pub(super) struct ToolState {
     /// The vertices it held at the end of the last step: each one's position and force on
     /// the tool (world), for the haptic model.
     pub(super) held: HeldContacts,
+    /// A dynamic tool's support by the surfaces: their impulse and its moment about the
+    /// centre of mass over its last rigid step, over the step's length (world; zero when they
+    /// did not touch it), handed to rapier's next step as a force ([`super::dynamic_tools::Fed`]).
+    pub(super) feed: (Vector, Vector),
 }
 
 /// Soft surfaces on rapier bodies and the rigid tools that press into them.
@@ -251,10 +255,12 @@ pub(super) struct ToolState {
 /// vertices (normal, and with friction tangential: [`crate::surface::Tangential`]). A
 /// grasping tool also holds those points, in every direction, until it lets go.
 /// Dynamic tools are coupled implicitly ([`crate::surface::RigidHolder`]): rapier moves them
-/// first (gravity, your forces, their other contacts); then each surface replays the rigid
-/// step from their poses at its start, the body's mass entering every substep's constraint
-/// solve, and the body takes the pose and velocity the surfaces leave it (with its colliders,
-/// so ray casts see it there). A dynamic tool presses the surface vertices inside it or within
+/// first (gravity, your forces, their other contacts, and the surfaces' support of the last
+/// step as a force, so that bodies resting on a tool rest on a held body); then each surface
+/// replays the rigid step from their poses and velocities at its start, what rapier's step
+/// changed of those added a substep at a time, the body's mass entering every substep's
+/// constraint solve, and the body takes the pose and velocity the surfaces leave it (with its
+/// colliders, so ray casts see it there). A dynamic tool presses the surface vertices inside it or within
 /// its reach over the next substep, the points of the triangles nearest it or deepest in it
 /// (parry's contact query) and, for a polyhedral tool, its own vertices and edges; a point
 /// short of it is a speculative contact, which may close its gap, not pass it, and one that
@@ -335,6 +341,8 @@ pub struct SurfaceSet {
     pub(super) links: HashMap<ColliderHandle, LinkState>,
     /// The tools [`SurfaceSet::set_auto_tools`] registered (not the user's).
     pub(super) auto: HashSet<ColliderHandle>,
+    /// The supports added to dynamic tools' bodies for the rigid step under way.
+    pub(super) fed: Vec<Fed>,
 }
 
 impl std::fmt::Debug for SurfaceSet {
@@ -371,6 +379,7 @@ impl SurfaceSet {
             touch: TouchTracker::default(),
             links: HashMap::new(),
             auto: HashSet::new(),
+            fed: Vec::new(),
         }
     }
 

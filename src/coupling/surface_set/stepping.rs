@@ -2,6 +2,7 @@
 //! substeps with the tools' reactions and the dynamic tools moved by them.
 
 use super::*;
+use rapier3d::dynamics::RigidBodySet;
 
 impl SurfaceSet {
     /// The haptic path: puts `tool` at the device pose `device` (world), steps every surface
@@ -98,19 +99,29 @@ impl SurfaceSet {
         world: &mut PhysicsWorld,
         rigid_step: impl FnOnce(&mut PhysicsWorld),
     ) {
-        self.begin_step(&world.colliders);
+        self.begin_step(&mut world.bodies, &world.colliders);
         self.drive_haptic_tools(&mut world.bodies, &mut world.colliders);
         rigid_step(world);
         self.step_surfaces(world);
         self.publish_haptic_models(world);
     }
 
-    /// Records the tools' poses at the start of a rigid step (the first half of
-    /// [`SurfaceSet::step_with`], for engines that own the step).
-    pub(crate) fn begin_step(&mut self, colliders: &ColliderSet) {
+    /// Records the tools' poses at the start of a rigid step, and hands rapier the surfaces'
+    /// support of the dynamic tools they touched in the last one as forces on their bodies,
+    /// for this step only ([`Fed`]; the first half of [`SurfaceSet::step_with`], for engines
+    /// that own the step).
+    pub(crate) fn begin_step(&mut self, bodies: &mut RigidBodySet, colliders: &ColliderSet) {
         self.tools.retain(|h, _| colliders.contains(*h));
+        // Supports a step left on (its surface part never ran) come off first.
+        for f in std::mem::take(&mut self.fed) {
+            f.remove(bodies);
+        }
         for (h, t) in self.tools.iter_mut() {
             t.prev = colliders.get(*h).map(|c| *c.position());
+            let body = colliders.get(*h).and_then(|c| c.parent());
+            if let Some(fed) = body.and_then(|b| Fed::add(bodies, b, t.feed)) {
+                self.fed.push(fed);
+            }
         }
     }
 
@@ -123,6 +134,13 @@ impl SurfaceSet {
         for t in self.tools.values_mut() {
             t.reaction = ToolReaction::default();
             t.held.clear();
+            t.feed = (Vector::ZERO, Vector::ZERO);
+        }
+        // The supports were for rapier's step: taken off the bodies, and out of the velocity
+        // the replay starts from (the surfaces give it their impulses themselves).
+        let fed = std::mem::take(&mut self.fed);
+        for f in &fed {
+            f.remove(&mut world.bodies);
         }
         let mut tool_list: Vec<ToolMotion> = self
             .tools
@@ -145,7 +163,7 @@ impl SurfaceSet {
         // The dynamic tools at the start of the rigid step, with rapier's new velocities.
         let dynamic: Vec<DynamicTool> = tool_list
             .iter()
-            .filter_map(|t| DynamicTool::new(world, t.handle, t.start))
+            .filter_map(|t| DynamicTool::new(world, t.handle, t.start, &fed))
             .collect();
         for (j, d) in dynamic.iter().enumerate() {
             if let Some(t) = tool_list.iter_mut().find(|t| t.handle == d.collider) {
@@ -153,6 +171,7 @@ impl SurfaceSet {
             }
         }
         let mut changes = vec![MotionChange::default(); dynamic.len()];
+        let mut supports = vec![(Vector::ZERO, Vector::ZERO); dynamic.len()];
         let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
         let mut touching = self.touch.take_spare();
         for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
@@ -207,9 +226,16 @@ impl SurfaceSet {
                 }
             }
             // What the surface changed of each dynamic tool's motion.
-            for ((start, end), change) in dynamic.iter().zip(&states).zip(changes.iter_mut()) {
+            for (((start, end), change), support) in dynamic
+                .iter()
+                .zip(&states)
+                .zip(changes.iter_mut())
+                .zip(supports.iter_mut())
+            {
                 if end.touched {
                     change.add(start, end, h, n);
+                    support.0 += end.impulse / dt;
+                    support.1 += end.angular_impulse / dt;
                 }
             }
         }
@@ -249,7 +275,10 @@ impl SurfaceSet {
         // their colliders with them.
         let mut moved = Vec::new();
         let length_unit = world.integration_parameters.length_unit;
-        for (d, change) in dynamic.iter().zip(&changes) {
+        for ((d, change), support) in dynamic.iter().zip(&changes).zip(&supports) {
+            if let Some(t) = self.tools.get_mut(&d.collider) {
+                t.feed = *support;
+            }
             let (Some((pose, v, w)), Some(b)) = (change.motion(), world.bodies.get_mut(d.body))
             else {
                 continue;

@@ -64,6 +64,7 @@ impl SurfaceSet {
                 friction: Friction::NONE,
                 grasp: false,
                 held: Vec::new(),
+                feed: (Vector::ZERO, Vector::ZERO),
             },
         );
         Ok(())
