@@ -58,6 +58,8 @@ pub(super) struct DynamicTool {
     /// The impulses it took ([`Self::take`]) and their moments about the centre of mass.
     pub impulse: Vector,
     pub angular_impulse: Vector,
+    /// Whether rapier's step had the surfaces' support on its body ([`Fed`]).
+    pub supported: bool,
 }
 
 /// A dynamic tool's allowed overlap with a surface, as a fraction of its size: within it a
@@ -144,6 +146,7 @@ impl DynamicTool {
             slop: SLOP * c.compute_aabb().extents().max_element(),
             impulse: Vector::ZERO,
             angular_impulse: Vector::ZERO,
+            supported: force != Vector::ZERO || torque != Vector::ZERO,
         };
         let finite = [tool.linvel, tool.angvel, acceleration, angular_acceleration]
             .iter()

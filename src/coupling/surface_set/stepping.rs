@@ -271,16 +271,33 @@ impl SurfaceSet {
             t.reaction.mean_force = mean.get(th).map_or(Vector::ZERO, |m| m.0);
         }
         // Two-way coupling: the dynamic tools the surfaces touched take the motion they left
-        // (their free motion at rapier's new velocity, changed by what each surface changed),
-        // their colliders with them.
+        // (their free motion from the step's start, changed by what each surface changed),
+        // their colliders with them. One rapier supported and no surface touched (it left
+        // them) takes its free motion: rapier's, less the support (which would have thrown a
+        // body lifting off a surface up with the surface's last push).
         let mut moved = Vec::new();
         let length_unit = world.integration_parameters.length_unit;
+        let touched: HashSet<RigidBodyHandle> = dynamic
+            .iter()
+            .zip(&changes)
+            .filter(|(_, c)| c.motion().is_some())
+            .map(|(d, _)| d.body)
+            .collect();
+        let mut left = HashSet::new();
+        let rapier_substeps = world.integration_parameters.num_solver_iterations.max(1) as u32;
         for ((d, change), support) in dynamic.iter().zip(&changes).zip(&supports) {
             if let Some(t) = self.tools.get_mut(&d.collider) {
                 t.feed = *support;
             }
-            let (Some((pose, v, w)), Some(b)) = (change.motion(), world.bodies.get_mut(d.body))
-            else {
+            let free = || {
+                let f = d.free(dt / rapier_substeps as Real, rapier_substeps);
+                (f.pose, f.linvel, f.angvel)
+            };
+            let motion = change.motion().or_else(|| {
+                let unsupported = !d.supported || touched.contains(&d.body);
+                (!unsupported && left.insert(d.body)).then(free)
+            });
+            let (Some((pose, v, w)), Some(b)) = (motion, world.bodies.get_mut(d.body)) else {
                 continue;
             };
             if !(pose.is_finite() && v.is_finite() && w.is_finite()) {
