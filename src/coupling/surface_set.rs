@@ -12,10 +12,11 @@ use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, SurfaceError};
 use parry3d::shape::{SharedShape, TriMeshFlags};
+use parry3d::utils::hashmap::HashMap;
+use parry3d::utils::hashset::HashSet;
 use rapier3d::dynamics::RigidBodyHandle;
 use rapier3d::geometry::{ColliderBuilder, ColliderHandle, ColliderSet, Group, InteractionGroups};
 use rapier3d::pipeline::PhysicsWorld;
-use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 mod auto_tools;
@@ -375,10 +376,10 @@ impl SurfaceSet {
     pub fn new() -> Self {
         Self {
             entries: Vec::new(),
-            tools: HashMap::new(),
+            tools: HashMap::default(),
             touch: TouchTracker::default(),
-            links: HashMap::new(),
-            auto: HashSet::new(),
+            links: HashMap::default(),
+            auto: HashSet::default(),
             fed: Vec::new(),
         }
     }

@@ -404,3 +404,145 @@ fn a_box_thrown_up_off_the_plate_rises_as_thrown() {
         "rose {rise} m, a throw at {v} m/s rises {expected} m"
     );
 }
+
+/// The energy of boxes on the plate and of the plate itself (its kinetic and elastic
+/// energy; it has no gravity): the boxes' kinetic energy, turning included, and their weight's
+/// potential.
+fn stack_energy(
+    world: &PhysicsWorld,
+    set: &SurfaceSet,
+    h: SurfaceHandle,
+    boxes: &[(RigidBodyHandle, ColliderHandle)],
+) -> f64 {
+    let mut e = set.get(h).unwrap().surface.total_energy();
+    for (b, _) in boxes {
+        let r = &world.bodies[*b];
+        let (m, v, w) = (r.mass() as f64, r.linvel(), r.angvel());
+        // Cubes: the same inertia about every axis.
+        let i = r.mass_properties().local_mprops.principal_inertia().x as f64;
+        e += 0.5 * m * v.length_squared() as f64 + 0.5 * i * w.length_squared() as f64;
+        e -= m * world.gravity.y as f64 * r.translation().y as f64;
+    }
+    e
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(8))]
+
+    /// Columns nobody tuned dropped on the plate: 1 to 4 boxes of 4 to 20 cm, 10 g to 1 kg
+    /// each, one above the other with gaps of 0 to 50 cm, on plates of 60 to 6000 N/m, with
+    /// and without friction (μ 0.5), 10 s. The energy of the boxes and the plate never rises
+    /// above what they started with (rapier's contacts between the boxes and the plate's
+    /// dampers only take energy away), and no box goes through the plate. Checked until a box
+    /// comes within its size of the plate's pinned rim: a box sliding off the edge of the
+    /// plate creates energy (the known failure `a_box_sliding_off_the_plates_edge_creates_no_energy`);
+    /// columns that topple on a frictionless plate slide there (CI's seed found one).
+    #[test]
+    fn dropped_columns_of_boxes_create_no_energy(
+        n in 1usize..5,
+        log_half in -1.7f32..-1.0,
+        log_mass in -2.0f32..0.0,
+        log_k in 1.78f32..3.78,
+        gap in 0.0f32..0.5,
+        friction in proptest::prelude::any::<bool>(),
+    ) {
+        let (half, mass) = (10f32.powf(log_half), 10f32.powf(log_mass));
+        let (mut world, mut set, h) = auto_plate();
+        set.get_mut(h).unwrap().surface.set_spring(10f32.powf(log_k), 2.0).unwrap();
+        let boxes: Vec<(RigidBodyHandle, ColliderHandle)> = (0..n)
+            .map(|i| {
+                let y = 0.1 + half + i as f32 * (2.0 * half + gap);
+                drop_box(&mut world, half, mass, y, ColliderBuilder::cuboid(half, half, half))
+            })
+            .collect();
+        let e0 = stack_energy(&world, &set, h, &boxes);
+        let inner = 0.5 - 2.0 * half;
+        for step in 0..600 {
+            let near_rim = boxes.iter().any(|(b, _)| {
+                let p = world.bodies[*b].translation();
+                p.x.abs() > inner || p.z.abs() > inner
+            });
+            if near_rim {
+                break;
+            }
+            set.step(&mut world);
+            if friction {
+                for (_, c) in &boxes {
+                    let _ = set.set_tool_friction(*c, Friction::new(0.5, 0.5).unwrap());
+                }
+            }
+            let e = stack_energy(&world, &set, h, &boxes);
+            proptest::prop_assert!(
+                e <= e0 + 1e-6 * e0.abs().max(1e-3),
+                "step {step}: {e} J against {e0} J at the start"
+            );
+            for (b, _) in &boxes {
+                let p = world.bodies[*b].translation();
+                let over = p.x.abs() < 0.45 && p.z.abs() < 0.45;
+                proptest::prop_assert!(!over || p.y > -0.5, "step {step}: a box through at {p:?}");
+            }
+        }
+    }
+}
+
+/// Known failure (issue 13), kept ignored: a 0.46 kg box of 7.4 cm sliding at 15 cm/s off
+/// the edge of a 2200 N/m plate pinned on its rim, turned 0.4 rad about the vertical. As it
+/// tips over the rim, parry's contacts of the rim's triangles with it have most of their
+/// weight on pinned vertices, and the surface's presses leave out such points (moving them
+/// would fling their free vertex by depth / weight) even for a dynamic tool, whose own motion
+/// should take them: the box sinks over the rim, the presses with a little more weight on
+/// free vertices take it, and the plate's energy jumps from 0.2 J to tens of joules. Run with
+/// `cargo test --release -- --ignored a_box_sliding_off`.
+#[test]
+#[ignore = "known failure: a dynamic tool tipping over a pinned rim creates energy"]
+fn a_box_sliding_off_the_plates_edge_creates_no_energy() {
+    let (mut world, mut set, h) = auto_plate();
+    set.get_mut(h)
+        .unwrap()
+        .surface
+        .set_spring(2203.0, 2.0)
+        .unwrap();
+    let half = 0.037;
+    let (body, c) = drop_box(
+        &mut world,
+        half,
+        0.463,
+        half + 0.001,
+        ColliderBuilder::cuboid(half, half, half),
+    );
+    let r = &mut world.bodies[body];
+    r.set_translation(Vector::new(0.0, half + 0.001, 0.3), true);
+    r.set_rotation(Rotation::from_rotation_y(0.4), true);
+    r.set_linvel(Vector::new(0.0, 0.0, 0.15), true);
+    let boxes = [(body, c)];
+    let e0 = stack_energy(&world, &set, h, &boxes);
+    for step in 0..240 {
+        set.step(&mut world);
+        let e = stack_energy(&world, &set, h, &boxes);
+        assert!(e <= e0 * (1.0 + 1e-6), "step {step}: {e} J against {e0} J");
+    }
+}
+
+/// A dynamic tool the user moves between steps (a teleport, a respawn) stays where it was put:
+/// a box resting on the plate, moved 30 cm along it, is there after the next step (it falls
+/// onto the plate from 1 mm, nothing more). Before, the surfaces replayed its step from its
+/// collider's pose, which follows the body only at rapier's step, and put it back.
+#[test]
+fn a_tool_moved_between_steps_stays_where_it_was_put() {
+    let (mut world, mut set, _) = auto_plate();
+    let half = 0.05;
+    let cube = ColliderBuilder::cuboid(half, half, half);
+    let (body, c) = drop_box(&mut world, half, 0.3, 0.1 + half, cube);
+    for _ in 0..120 {
+        set.step(&mut world);
+    }
+    assert!(set.tool_reaction(c).is_some(), "not taken");
+    let at = world.bodies[body].translation() + Vector::new(0.0, 0.001, 0.3);
+    world.bodies[body].set_translation(at, true);
+    set.step(&mut world);
+    let now = world.bodies[body].translation();
+    assert!(
+        (now - at).length() < 0.01,
+        "put at {at:?}, found at {now:?} after a step"
+    );
+}

@@ -104,7 +104,7 @@ impl SurfaceSet {
         if surfaces.is_empty() && self.auto.is_empty() {
             return;
         }
-        let mut near: HashSet<ColliderHandle> = HashSet::new();
+        let mut near: HashSet<ColliderHandle> = HashSet::default();
         for (_, b) in bodies.iter() {
             if !b.is_dynamic() || b.is_sleeping() {
                 continue;

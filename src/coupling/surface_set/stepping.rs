@@ -117,7 +117,15 @@ impl SurfaceSet {
             f.remove(bodies);
         }
         for (h, t) in self.tools.iter_mut() {
-            t.prev = colliders.get(*h).map(|c| *c.position());
+            // From the body: a collider's own pose follows its body only at rapier's step, and
+            // a body the user moved since (a teleport, a respawn) was put back by the replay.
+            t.prev = colliders.get(*h).map(|c| {
+                let parent = c.parent().and_then(|b| bodies.get(b));
+                match (parent, c.position_wrt_parent()) {
+                    (Some(b), Some(local)) => *b.position() * *local,
+                    _ => *c.position(),
+                }
+            });
             let body = colliders.get(*h).and_then(|c| c.parent());
             if let Some(fed) = body.and_then(|b| Fed::add(bodies, b, t.feed)) {
                 self.fed.push(fed);
@@ -172,7 +180,7 @@ impl SurfaceSet {
         }
         let mut changes = vec![MotionChange::default(); dynamic.len()];
         let mut supports = vec![(Vector::ZERO, Vector::ZERO); dynamic.len()];
-        let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::new();
+        let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::default();
         let mut touching = self.touch.take_spare();
         for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
@@ -283,7 +291,7 @@ impl SurfaceSet {
             .filter(|(_, c)| c.motion().is_some())
             .map(|(d, _)| d.body)
             .collect();
-        let mut left = HashSet::new();
+        let mut left = HashSet::default();
         let rapier_substeps = world.integration_parameters.num_solver_iterations.max(1) as u32;
         for ((d, change), support) in dynamic.iter().zip(&changes).zip(&supports) {
             if let Some(t) = self.tools.get_mut(&d.collider) {
