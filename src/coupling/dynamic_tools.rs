@@ -77,8 +77,9 @@ impl DynamicTool {
     /// a box stacked on it struck it down by the upper box's weight times the step, the surface
     /// threw it back up, and rapier's next step carried that velocity to the box above: the
     /// pair kept a velocity of 1.4 cm/s upward at rest, and the upper box drifted off sideways.
-    /// A body with no record (asleep then) starts from rapier's new velocity less gravity and
-    /// the support.
+    /// A body asleep starts from the velocity rapier left it, gravity added in the substeps
+    /// (the surfaces still carry it); one with no record otherwise starts from rapier's new
+    /// velocity less gravity and the support.
     pub fn new(
         world: &PhysicsWorld,
         collider: ColliderHandle,

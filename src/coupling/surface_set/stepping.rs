@@ -168,7 +168,8 @@ impl SurfaceSet {
                 })
             })
             .collect();
-        // The dynamic tools at the start of the rigid step, with rapier's new velocities.
+        // The dynamic tools at the start of the rigid step, with their velocities then and
+        // what rapier's step changed of them.
         let dynamic: Vec<DynamicTool> = tool_list
             .iter()
             .filter_map(|t| DynamicTool::new(world, t.handle, t.start, &fed))
