@@ -337,6 +337,13 @@ fn stacked_boxes_stand_on_the_plate_and_it_carries_them_all() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// A 0.4 kg box of 12 cm with its bottom 10 cm over the plate's middle.
+fn box_over_plate(world: &mut PhysicsWorld) -> RigidBodyHandle {
+    let half = 0.06;
+    let cube = ColliderBuilder::cuboid(half, half, half);
+    drop_box(world, half, 0.4, 0.1 + half, cube).0
+}
+
 /// The surfaces' support is on a body for rapier's step only: a box resting on the plate with
 /// a force and a torque of the user's own (lifting half its weight, turning it about the
 /// vertical) keeps exactly them between steps, and the pins carry the other half of its
@@ -344,14 +351,7 @@ fn stacked_boxes_stand_on_the_plate_and_it_carries_them_all() {
 #[test]
 fn a_tools_own_forces_are_kept_exactly() {
     let (mut world, mut set, h) = auto_plate();
-    let half = 0.06;
-    let (body, _) = drop_box(
-        &mut world,
-        half,
-        0.4,
-        0.1 + half,
-        ColliderBuilder::cuboid(half, half, half),
-    );
+    let body = box_over_plate(&mut world);
     let weight = world.bodies[body].mass() * 9.81;
     let (force, torque) = (
         Vector::new(0.0, 0.5 * weight, 0.0),
@@ -378,14 +378,7 @@ fn a_tools_own_forces_are_kept_exactly() {
 #[test]
 fn a_box_thrown_up_off_the_plate_rises_as_thrown() {
     let (mut world, mut set, _) = auto_plate();
-    let half = 0.06;
-    let (body, _) = drop_box(
-        &mut world,
-        half,
-        0.4,
-        0.1 + half,
-        ColliderBuilder::cuboid(half, half, half),
-    );
+    let body = box_over_plate(&mut world);
     for _ in 0..240 {
         set.step(&mut world);
     }
