@@ -558,3 +558,39 @@ fn a_tool_moved_between_steps_stays_where_it_was_put() {
         "put at {at:?}, found at {now:?} after a step"
     );
 }
+
+/// The same with a body of two colliders side by side (each a tool, each given its own
+/// support): the user's force and torque are still kept bit for bit (the supports come off in
+/// the reverse of the order they went on).
+#[test]
+fn a_two_collider_tools_own_forces_are_kept_exactly() {
+    let (mut world, mut set, _) = auto_plate();
+    let half = 0.04;
+    let body = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 0.1 + half, 0.0))
+            .can_sleep(false),
+    );
+    for x in [-0.06, 0.06] {
+        let c = ColliderBuilder::cuboid(half, half, half)
+            .translation(Vector::new(x, 0.0, 0.0))
+            .density(300.0);
+        world.insert_collider(c, Some(body));
+    }
+    let weight = world.bodies[body].mass() * 9.81;
+    let (force, torque) = (
+        Vector::new(0.1, 0.3 * weight, -0.07),
+        Vector::new(1e-4, 3e-5, -2e-4),
+    );
+    world.bodies[body].add_force(force, true);
+    world.bodies[body].add_torque(torque, true);
+    for step in 0..300 {
+        set.step(&mut world);
+        let b = &world.bodies[body];
+        assert_eq!(
+            (b.user_force(), b.user_torque()),
+            (force, torque),
+            "step {step}"
+        );
+    }
+}

@@ -112,8 +112,10 @@ impl SurfaceSet {
     /// that own the step).
     pub(crate) fn begin_step(&mut self, bodies: &mut RigidBodySet, colliders: &ColliderSet) {
         self.tools.retain(|h, _| colliders.contains(*h));
-        // Supports a step left on (its surface part never ran) come off first.
-        for f in std::mem::take(&mut self.fed) {
+        // Supports a step left on (its surface part never ran) come off first, last on first
+        // off (a body with several tool colliders gets one each: so its own force comes
+        // back exactly).
+        for f in std::mem::take(&mut self.fed).iter().rev() {
             f.remove(bodies);
         }
         for (h, t) in self.tools.iter_mut() {
@@ -147,7 +149,7 @@ impl SurfaceSet {
         // The supports were for rapier's step: taken off the bodies, and out of the velocity
         // the replay starts from (the surfaces give it their impulses themselves).
         let fed = std::mem::take(&mut self.fed);
-        for f in &fed {
+        for f in fed.iter().rev() {
             f.remove(&mut world.bodies);
         }
         let mut tool_list: Vec<ToolMotion> = self
