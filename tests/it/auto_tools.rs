@@ -443,7 +443,10 @@ proptest::proptest! {
     /// surfaces' impulse that stopped the struck box is handed to rapier's next step as its
     /// support, and throws up the box on it. Handing rapier the smaller of the last two steps'
     /// supports fixed that case but let stacks on 600 N/m slide apart (19 mm) and threw a light
-    /// box on seed 19: not kept.
+    /// box on seed 19: not kept. Random seed 8301 fails the same way (three 11 g boxes of 4.4 cm
+    /// on 694 N/m, three times their energy at the first landings); every failure seen had
+    /// friction on. Handing rapier the support's force without its torque passed seeds 23 and
+    /// 8301 but failed seed 5: not kept either.
     #[test]
     fn dropped_columns_of_boxes_create_no_energy(
         n in 1usize..5,
