@@ -227,8 +227,8 @@ impl DynamicTool {
 /// The surfaces' support of a dynamic tool, handed to rapier as a force on its body for one
 /// rigid step (added before it, taken off after it).
 ///
-/// The surfaces replay a rigid step's motion of a tool they touch from rapier's new velocity.
-/// Without the support, rapier moved the tool as if nothing held it: a box resting on a
+/// The surfaces replay a rigid step's motion of a tool they touch from its pose and
+/// velocities at the step's start. Without the support, rapier moved the tool as if nothing held it: a box resting on a
 /// surface fell freely in rapier's step, and a box stacked on it was pushed back by only its
 /// share of their contact (half, between equal boxes), the other half going into the lower
 /// box's fall, which the surfaces' replay then undid. The upper box sank into the lower one at
@@ -317,9 +317,8 @@ impl Fed {
 /// the substeps (a ball thrown at 10³⁰ m/s crossed the plate in the first substep).
 fn capped(params: &IntegrationParameters, fed: &Fed, angvel_after: Vector) -> (Vector, Vector) {
     let cap = |v: Vector, max: Real| {
-        let n = v.length();
-        if n > max && max > 0.0 {
-            v * (max / n)
+        if max > 0.0 {
+            v.clamp_length_max(max)
         } else {
             v
         }

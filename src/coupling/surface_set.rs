@@ -261,8 +261,8 @@ pub(super) struct ToolState {
 /// replays the rigid step from their poses and velocities at its start, what rapier's step
 /// changed of those added a substep at a time, the body's mass entering every substep's
 /// constraint solve, and the body takes the pose and velocity the surfaces leave it (with its
-/// colliders, so ray casts see it there). A dynamic tool presses the surface vertices inside it or within
-/// its reach over the next substep, the points of the triangles nearest it or deepest in it
+/// colliders, so ray casts see it there). A dynamic tool presses the surface vertices inside
+/// it or within its reach over the next substep, the points of the triangles nearest it or deepest in it
 /// (parry's contact query) and, for a polyhedral tool, its own vertices and edges; a point
 /// short of it is a speculative contact, which may close its gap, not pass it, and one that
 /// overlaps it by less than a thousandth of its size is held where it is, not pushed out.

@@ -288,15 +288,17 @@ impl SurfaceSet {
         // body lifting off a surface up with the surface's last push).
         let mut moved = Vec::new();
         let length_unit = world.integration_parameters.length_unit;
+        let motions: Vec<Option<(Pose, Vector, Vector)>> =
+            changes.iter().map(MotionChange::motion).collect();
         let touched: HashSet<RigidBodyHandle> = dynamic
             .iter()
-            .zip(&changes)
-            .filter(|(_, c)| c.motion().is_some())
+            .zip(&motions)
+            .filter(|(_, m)| m.is_some())
             .map(|(d, _)| d.body)
             .collect();
         let mut left = HashSet::default();
         let rapier_substeps = world.integration_parameters.num_solver_iterations.max(1) as u32;
-        for ((d, change), support) in dynamic.iter().zip(&changes).zip(&supports) {
+        for ((d, motion), support) in dynamic.iter().zip(motions).zip(&supports) {
             if let Some(t) = self.tools.get_mut(&d.collider) {
                 t.feed = *support;
             }
@@ -304,7 +306,7 @@ impl SurfaceSet {
                 let f = d.free(dt / rapier_substeps as Real, rapier_substeps);
                 (f.pose, f.linvel, f.angvel)
             };
-            let motion = change.motion().or_else(|| {
+            let motion = motion.or_else(|| {
                 let unsupported = !d.supported || touched.contains(&d.body);
                 (!unsupported && left.insert(d.body)).then(free)
             });

@@ -12,6 +12,13 @@ use glamx::DVec3;
 
 /// The least weight a pressed point must have on vertices that can move.
 const MIN_MOVABLE_WEIGHT: f64 = 0.25;
+/// Below [`MIN_MOVABLE_WEIGHT`], a point is still pressed while the way its free vertices must
+/// go (its depth over their weight) is at most this share of its vertices' span, and their
+/// weight at least [`LEAST_MOVABLE_WEIGHT`].
+const MAX_LEVERED_SHARE: f64 = 0.05;
+/// The weight on movable vertices below which a point is always left to its other vertices.
+const LEAST_MOVABLE_WEIGHT: f64 = 0.02;
+
 /// Makes a rigid holder's press's targets relative to the holder's velocity at the point (the
 /// step reads it from `holders`); a press naming no such holder loses its holder.
 fn relative_to_holder(holders: &[HolderState], hold: &mut PointHold) {
@@ -28,13 +35,6 @@ fn relative_to_holder(holders: &[HolderState], hold: &mut PointHold) {
     hold.min_velocity -= own.dot(hold.normal);
     hold.carried = hold.carried.map(|v| v - own);
 }
-
-/// Below [`MIN_MOVABLE_WEIGHT`], a point is still pressed while the way its free vertices must
-/// go (its depth over their weight) is at most this share of its vertices' span, and their
-/// weight at least [`LEAST_MOVABLE_WEIGHT`].
-const MAX_LEVERED_SHARE: f64 = 0.05;
-/// The weight on movable vertices below which a point is always left to its other vertices.
-const LEAST_MOVABLE_WEIGHT: f64 = 0.02;
 
 /// One point to press (see [`MassSpringSurface::press_points`]).
 #[derive(Copy, Clone, Debug, PartialEq)]
