@@ -12,7 +12,7 @@ const CELLS: u32 = 12;
 
 /// A 1 m plate of 12 × 12 cells with edges of 60 N/m (dampers of 2 N·s/m, rim pinned, 4
 /// substeps, its collider in collision group 1) taking any body as a tool, under gravity.
-fn auto_plate() -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
+pub(crate) fn auto_plate() -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
     let mut world = PhysicsWorld::default();
     let (mut set, h) = pinned_plate(&mut world, 1.0, CELLS, 60.0, None, 4);
     set.get_mut(h)
@@ -32,7 +32,7 @@ fn auto_plate() -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
 
 /// A dynamic box of `half` half-extents and `mass` with its centre at `y` above the plate's
 /// middle, on collider `builder` (its groups as the test sets them).
-fn drop_box(
+pub(crate) fn drop_box(
     world: &mut PhysicsWorld,
     half: f32,
     mass: f32,
@@ -401,7 +401,7 @@ fn a_box_thrown_up_off_the_plate_rises_as_thrown() {
 /// The energy of boxes on the plate: their kinetic energy, turning included, and their
 /// weight's potential; with `plate`, the plate's kinetic and elastic energy too (it has no
 /// gravity).
-fn stack_energy(
+pub(crate) fn stack_energy(
     world: &PhysicsWorld,
     set: &SurfaceSet,
     (h, plate): (SurfaceHandle, bool),
@@ -423,78 +423,6 @@ fn stack_energy(
     e
 }
 
-proptest::proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(8))]
-
-    /// Columns nobody tuned dropped on the plate: 1 to 4 boxes of 4 to 20 cm, 10 g to 1 kg
-    /// each, one above the other with gaps of 0 to 50 cm, on plates of 60 to 6000 N/m, with
-    /// and without friction (μ 0.5), 10 s. The boxes' energy (kinetic and their weight's
-    /// potential) never rises above what they started with, and no box goes through the plate.
-    /// Checked until a box comes within its size of the plate's pinned rim: a box sliding off
-    /// the plate's edge creates energy (the known failure
-    /// `a_box_sliding_off_the_plates_edge_creates_no_energy`; columns that topple on a
-    /// frictionless plate slide there, CI's seed found one). The plate's own energy is left
-    /// out: where a cube lands flat, the presses move the vertices under it to its face at
-    /// once and the plate's elastic energy jumps for a step (random seed 13: 25 g, 4.2 cm,
-    /// 844 N/m, the plate at 0.037 J with 0.029 J brought in; the same on the code before the
-    /// support), then its dampers take it. Known failure, random seed 23 (of 24 run): three
-    /// 45 g boxes of 4.1 cm dropped 35 cm apart onto each other on 2000 N/m with friction gain
-    /// half their energy (1.05 J against 0.67 J) when the second lands on the first: the
-    /// surfaces' impulse that stopped the struck box is handed to rapier's next step as its
-    /// support, and throws up the box on it. Handing rapier the smaller of the last two steps'
-    /// supports fixed that case but let stacks on 600 N/m slide apart (19 mm) and threw a light
-    /// box on seed 19: not kept. Random seed 8301 fails the same way (three 11 g boxes of 4.4 cm
-    /// on 694 N/m, three times their energy at the first landings); every failure seen had
-    /// friction on. Handing rapier the support's force without its torque passed seeds 23 and
-    /// 8301 but failed seed 5: not kept either.
-    #[test]
-    fn dropped_columns_of_boxes_create_no_energy(
-        n in 1usize..5,
-        log_half in -1.7f32..-1.0,
-        log_mass in -2.0f32..0.0,
-        log_k in 1.78f32..3.78,
-        gap in 0.0f32..0.5,
-        friction in proptest::prelude::any::<bool>(),
-    ) {
-        let (half, mass) = (10f32.powf(log_half), 10f32.powf(log_mass));
-        let (mut world, mut set, h) = auto_plate();
-        set.get_mut(h).unwrap().surface.set_spring(10f32.powf(log_k), 2.0).unwrap();
-        let boxes: Vec<(RigidBodyHandle, ColliderHandle)> = (0..n)
-            .map(|i| {
-                let y = 0.1 + half + i as f32 * (2.0 * half + gap);
-                drop_box(&mut world, half, mass, y, ColliderBuilder::cuboid(half, half, half))
-            })
-            .collect();
-        let e0 = stack_energy(&world, &set, (h, false), &boxes);
-        let inner = 0.5 - 2.0 * half;
-        for step in 0..600 {
-            let near_rim = boxes.iter().any(|(b, _)| {
-                let p = world.bodies[*b].translation();
-                p.x.abs() > inner || p.z.abs() > inner
-            });
-            if near_rim {
-                break;
-            }
-            set.step(&mut world);
-            if friction {
-                for (_, c) in &boxes {
-                    let _ = set.set_tool_friction(*c, Friction::new(0.5, 0.5).unwrap());
-                }
-            }
-            let e = stack_energy(&world, &set, (h, false), &boxes);
-            proptest::prop_assert!(
-                e <= e0 + 1e-6 * e0.abs().max(1e-3),
-                "step {step}: {e} J against {e0} J at the start"
-            );
-            for (b, _) in &boxes {
-                let p = world.bodies[*b].translation();
-                let over = p.x.abs() < 0.45 && p.z.abs() < 0.45;
-                proptest::prop_assert!(!over || p.y > -0.5, "step {step}: a box through at {p:?}");
-            }
-        }
-    }
-}
-
 /// Known failure (issue 13), kept ignored: a 0.46 kg box of 7.4 cm sliding at 15 cm/s off
 /// the edge of a 2200 N/m plate pinned on its rim, turned 0, 0.4 and 0.785 rad about the
 /// vertical and spinning about it at 0, 2 and -3 rad/s: the energy of the box and the plate
@@ -503,7 +431,8 @@ proptest::proptest! {
 /// from 0.2 J to tens of joules in 7 of the 9 runs. A dynamic tool's points on triangles with
 /// a pinned vertex are now held in the step's solve without moving the surface first: 8 of the
 /// 9 hold. Turned 0 and not spinning, the box falling past the rim still flings the vertices
-/// one ring in (4.5 cm, 9.6 J). Run with `cargo test --release -- --ignored a_box_sliding_off`.
+/// one ring in (4.5 cm, 9.6 J; 4.3 J since a rigid holder's friction passes changed). Run
+/// with `cargo test --release -- --ignored a_box_sliding_off`.
 #[test]
 #[ignore = "known failure: a dynamic tool falling past a pinned rim can create energy"]
 fn a_box_sliding_off_the_plates_edge_creates_no_energy() {

@@ -6,6 +6,7 @@ mod common;
 mod compare_scenes;
 mod coupling;
 mod curved_reconstruction;
+mod dropped_columns;
 mod dynamic_drops;
 mod dynamic_impacts;
 mod dynamic_scales;

@@ -245,8 +245,9 @@ impl SurfaceSet {
             {
                 if end.touched {
                     change.add(start, end, h, n);
-                    support.0 += end.impulse / dt;
-                    support.1 += end.angular_impulse / dt;
+                    let (force, torque) = end.support(dt);
+                    support.0 += force;
+                    support.1 += torque;
                 }
             }
         }

@@ -9,7 +9,7 @@ use super::blocks::independent_blocks;
 use super::point_hold::{ActiveMemory, PointHold, Remembered};
 use super::rigid_holder::{give_impulses, merge_blocks, motion, HolderRow, HolderState};
 use crate::surface::filter::{Filter, FilterKind};
-use friction::{Grip, SlidingPoint, FRICTION_PASSES, FRICTION_TOLERANCE};
+use friction::{unit, Grip, HolderCuts, SlidingPoint, FRICTION_PASSES, HOLDER_FRICTION_PASSES};
 use glamx::DVec3;
 use rows::{rows, surface_independent, targets, Con, Row, Rows};
 
@@ -152,10 +152,6 @@ pub(super) fn constrain(
     let mut active = vec![false; m];
     // Each point with friction starts as it ended the last step (stuck, or sliding the same
     // way with the same load), a new one stuck if it asks for a push.
-    let unit = |(a, b): (f64, f64)| {
-        let l = a.hypot(b);
-        (l > 0.0).then(|| (a / l, b / l))
-    };
     let mut grip: Vec<Grip> = (0..points.len())
         .map(|pi| {
             let Some((t1, t2)) = tangent_rows[pi] else {
@@ -244,7 +240,16 @@ pub(super) fn constrain(
         // a stuck one whose carrying impulse passes the static limit slides, a sliding one
         // that the fixed impulse would drive past its holder sticks; again until none
         // changes.
-        for pass in 0..FRICTION_PASSES {
+        let passes = if any_holder {
+            HOLDER_FRICTION_PASSES
+        } else {
+            FRICTION_PASSES
+        };
+        // Set when the passes end with rigid holders' stuck points carried past their static
+        // limit with a cut that would unbalance their holder: one more solve without
+        // friction on those points (below).
+        let mut fallback = false;
+        for pass in 0..=passes {
             let mut rows: Vec<usize> = block
                 .iter()
                 .copied()
@@ -427,7 +432,8 @@ pub(super) fn constrain(
             };
             let residual = |c: usize| rhs[c] - along(c, &after) - holder_along(c, &after_motion);
             let mut changed = false;
-            for &pi in &frictional {
+            let mut cuts = HolderCuts::new(holders.len());
+            for &pi in frictional.iter().filter(|_| !fallback) {
                 let (Some((t1, t2)), Some((mu_s, mu_d))) = (tangent_rows[pi], points[pi].cone)
                 else {
                     continue;
@@ -439,43 +445,39 @@ pub(super) fn constrain(
                     Some((l, true)) if l > 0.0 => l + points[pi].impulse.max(0.0),
                     _ => 0.0,
                 };
-                let next = match grip[pi] {
-                    _ if load == 0.0 => Grip::Off,
-                    Grip::Off => Grip::Stuck,
-                    Grip::Stuck => {
-                        let l = (
-                            value(t1).map_or(0.0, |v| v.0),
-                            value(t2).map_or(0.0, |v| v.0),
-                        );
-                        match unit(l) {
-                            Some(direction) if l.0.hypot(l.1) > mu_s * load => Grip::Sliding {
-                                direction,
-                                impulse: mu_d * load,
-                            },
-                            _ => Grip::Stuck,
-                        }
-                    }
-                    Grip::Sliding { direction, .. } => {
-                        let r = (residual(t1), residual(t2));
-                        if r.0 * direction.0 + r.1 * direction.1 < 0.0 {
-                            Grip::Stuck
-                        } else {
-                            Grip::Sliding {
-                                direction,
-                                impulse: mu_d * load,
-                            }
-                        }
-                    }
-                };
-                changed |= match (grip[pi], next) {
-                    (Grip::Sliding { impulse: a, .. }, Grip::Sliding { impulse: b, .. }) => {
-                        (a - b).abs() > FRICTION_TOLERANCE * b
-                    }
-                    (a, b) => std::mem::discriminant(&a) != std::mem::discriminant(&b),
-                };
+                let carrying = (
+                    value(t1).map_or(0.0, |v| v.0),
+                    value(t2).map_or(0.0, |v| v.0),
+                );
+                if let (Grip::Stuck, Some(holder)) = (grip[pi], points[pi].holder) {
+                    let directions = (cons[t1].0, cons[t2].0);
+                    cuts.add(pi, holder, (directions, carrying), mu_s * load, load);
+                }
+                let next = grip[pi].next(
+                    load,
+                    carrying,
+                    || (residual(t1), residual(t2)),
+                    (mu_s, mu_d),
+                );
+                changed |= grip[pi].changed_to(next);
                 grip[pi] = next;
             }
-            if !changed || pass + 1 == FRICTION_PASSES {
+            // After the last pass, stuck points whose cut to their limit would unbalance their
+            // rigid holder are solved once more without friction ([`HolderCuts`]).
+            let done = fallback || !changed || pass + 1 == passes;
+            let cut_off = cuts.unbalancing();
+            if done && !cut_off.is_empty() && !fallback && pass < passes {
+                fallback = true;
+                for &pi in &cut_off {
+                    grip[pi] = Grip::Off;
+                }
+                for &c in &rows {
+                    at[c] = usize::MAX;
+                }
+                last = Some((rows, a_mat));
+                continue;
+            }
+            if done {
                 for (i, &c) in rows.iter().enumerate() {
                     lambda[c] = x[i];
                     active[c] = act[i];
