@@ -29,14 +29,7 @@ proptest::proptest! {
         gap in 0.0f32..0.5,
         friction in proptest::prelude::any::<bool>(),
     ) {
-        let column = Column {
-            n,
-            half: 10f32.powf(log_half),
-            mass: 10f32.powf(log_mass),
-            stiffness: 10f32.powf(log_k),
-            gap,
-            friction,
-        };
+        let column = Column::drawn(n, (log_half, log_mass, log_k), gap, friction);
         if let Err(e) = column.drop(600) {
             proptest::prop_assert!(false, "{}", e);
         }
@@ -56,6 +49,24 @@ struct Column {
 }
 
 impl Column {
+    /// The column of `n` boxes with the base-10 logarithms of their half-extents, mass and
+    /// the plate's stiffness, as the property test draws them.
+    fn drawn(
+        n: usize,
+        (log_half, log_mass, log_k): (f32, f32, f32),
+        gap: f32,
+        friction: bool,
+    ) -> Self {
+        Column {
+            n,
+            half: 10f32.powf(log_half),
+            mass: 10f32.powf(log_mass),
+            stiffness: 10f32.powf(log_k),
+            gap,
+            friction,
+        }
+    }
+
     /// Drops the column for up to `steps` steps: the boxes' energy (kinetic and their
     /// weight's potential) never rises above what they started with, and no box goes
     /// through the plate (checked until a box comes within its size of the plate's pinned
@@ -145,14 +156,7 @@ fn the_columns_that_gained_energy_keep_it() {
         (4, -1.209_329_5, -1.932_485_9, 3.776_327_8, 0.229_778_36),
     ];
     for (n, log_half, log_mass, log_k, gap) in cases {
-        let column = Column {
-            n,
-            half: 10f32.powf(log_half),
-            mass: 10f32.powf(log_mass),
-            stiffness: 10f32.powf(log_k),
-            gap,
-            friction: true,
-        };
+        let column = Column::drawn(n, (log_half, log_mass, log_k), gap, true);
         if let Err(e) = column.drop(600) {
             panic!("{n} boxes of 10^{log_half} m on 10^{log_k} N/m: {e}");
         }

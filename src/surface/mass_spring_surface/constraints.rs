@@ -465,8 +465,12 @@ pub(super) fn constrain(
             // After the last pass, stuck points whose cut to their limit would unbalance their
             // rigid holder are solved once more without friction ([`HolderCuts`]).
             let done = fallback || !changed || pass + 1 == passes;
-            let cut_off = cuts.unbalancing();
-            if done && !cut_off.is_empty() && !fallback && pass < passes {
+            let cut_off = if done && !fallback {
+                cuts.unbalancing()
+            } else {
+                Vec::new()
+            };
+            if !cut_off.is_empty() && pass < passes {
                 fallback = true;
                 for &pi in &cut_off {
                     grip[pi] = Grip::Off;
