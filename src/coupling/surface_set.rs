@@ -213,6 +213,10 @@ impl AttachedSurface {
 #[derive(Clone, Debug)]
 pub(super) struct ToolState {
     prev: Option<Pose>,
+    /// Its parent body's pose times its pose on the body at the end of the last step (`None`
+    /// for a collider without a body), to tell at the next step which of the two the user
+    /// moved in between ([`SurfaceSet::begin_step`]).
+    seen_on_body: Option<Pose>,
     pub(super) reaction: ToolReaction,
     /// The device pose of the last haptic step.
     haptic_prev: Option<Pose>,

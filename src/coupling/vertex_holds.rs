@@ -31,9 +31,10 @@ pub(super) struct Holds {
 ///
 /// A vertex that just entered is walked back along its inverse trajectory relative to the tool
 /// (eq. 1-2 for one vertex): from where it is, back along its own motion over the substep minus
-/// the tool's, to the tool's boundary. A vertex already in contact slides: it is snapped to the
-/// nearest boundary point, keeps its own tangential velocity and takes the tool's normal
-/// velocity. With friction ([`super::friction`]) a vertex that sticks is carried by the tool's
+/// the tool's, to the tool's boundary, and slides on from there along the face it entered by
+/// for the rest of the substep ([`slid_on`]). A vertex already in contact slides: it is
+/// snapped to the nearest boundary point, keeps its own tangential velocity and takes the
+/// tool's normal velocity. With friction ([`super::friction`]) a vertex that sticks is carried by the tool's
 /// material point it stuck to, with that point's whole velocity, until its tangential force
 /// passes the static limit; a slipping vertex is pulled back by kinetic friction. A grasping
 /// tool keeps every vertex it touches stuck, pulled or pushed, until it lets go.
@@ -118,7 +119,7 @@ pub(super) fn hold_vertices(
                 let out = if entering && rel.length() > (nearest - *p).length() + margin {
                     exit_along(shape, pose, *p, rel.normalize())
                         .filter(|q| (*q - *p).length() <= walk)
-                        .unwrap_or(nearest)
+                        .map_or(nearest, |q| slid_on(shape, pose, *p, q, rel, margin))
                 } else {
                     nearest
                 };
@@ -264,4 +265,35 @@ pub(super) fn hold_vertices(
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));
     out
+}
+
+/// Where a vertex that entered the tool at `q` over the substep (found at `p`, inside, its
+/// motion relative to the tool `-rel`) ends it: after `q` it slides along the face it entered
+/// by, its normal motion stopped there and its tangential motion kept (as its velocity is):
+/// `p` put on that face's plane, then on the tool's boundary (a curved face's).
+///
+/// The paper leaves the vertex at `q`, where it entered. That is right for a vertex coming in
+/// along the normal, and wrong for one grazing in: its tangential velocity is kept, its
+/// tangential motion was not, and the springs sped it up where it could not move. A plate
+/// vertex lying on a cube's face that circled over it entered by a micrometre at every
+/// substep, was put back where it had been, and reached 4 m/s in place, the plate's energy
+/// rising from 1.4 mJ to 65 mJ in 2 s under a tool that did 0.1 µJ of work a step.
+fn slid_on(
+    shape: &dyn parry3d::shape::Shape,
+    pose: &Pose,
+    p: Vector,
+    q: Vector,
+    rel: Vector,
+    margin: Real,
+) -> Vector {
+    let out_of = pose.rotation.inverse() * rel.normalize_or_zero();
+    let n = pose.rotation
+        * outward_normal_toward(shape, pose.inverse_transform_point(q), margin, out_of);
+    let on_plane = p - n * (p - q).dot(n);
+    let out = nearest_on_boundary(shape, pose, on_plane);
+    if out.is_finite() && (out - q).length() <= (p - q).length() + margin {
+        out
+    } else {
+        q
+    }
 }

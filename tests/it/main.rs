@@ -1,6 +1,7 @@
 //! One integration-test binary (links once): a module per layer and claim.
 
 mod auto_tools;
+mod circling_tools;
 mod classic_loop;
 mod common;
 mod compare_scenes;

@@ -119,12 +119,20 @@ impl SurfaceSet {
             f.remove(bodies);
         }
         for (h, t) in self.tools.iter_mut() {
-            // From the body: a collider's own pose follows its body only at rapier's step, and
-            // a body the user moved since (a teleport, a respawn) was put back by the replay.
+            // Where the tool starts the step. A collider's own pose follows its body only at
+            // rapier's step: a body the user moved since the last step (a teleport, a
+            // respawn, put back by the replay) starts from its new pose. Otherwise the
+            // collider's own pose, which is that same pose unless the user moved the
+            // collider itself, with `set_position` in a rigid step of their own (rapier's
+            // step puts an awake body's colliders back on it). Six kinematic cubes moved that
+            // way in a bench started every step from their bodies' first pose, up to 10 mm
+            // off: each step swept them through the plate, which rose from 5 mJ to 3 J.
             t.prev = colliders.get(*h).map(|c| {
                 let parent = c.parent().and_then(|b| bodies.get(b));
                 match (parent, c.position_wrt_parent()) {
-                    (Some(b), Some(local)) => *b.position() * *local,
+                    (Some(b), Some(local)) if t.seen_on_body != Some(*b.position() * *local) => {
+                        *b.position() * *local
+                    }
                     _ => *c.position(),
                 }
             });
@@ -337,5 +345,11 @@ impl SurfaceSet {
             moved.push(d.body);
         }
         crate::hooks::sync_moved_colliders(world, &mut moved);
+        for (h, t) in self.tools.iter_mut() {
+            t.seen_on_body = world.colliders.get(*h).and_then(|c| {
+                let b = world.bodies.get(c.parent()?)?;
+                Some(*b.position() * *c.position_wrt_parent()?)
+            });
+        }
     }
 }

@@ -57,6 +57,7 @@ impl SurfaceSet {
             tool,
             ToolState {
                 prev: None,
+                seen_on_body: None,
                 reaction: ToolReaction::default(),
                 haptic_prev: None,
                 had_surface_group,
