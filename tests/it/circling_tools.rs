@@ -23,7 +23,7 @@
 //! the tool (a box flat or turned, the box as a convex hull, a ball, a cylinder, a capsule)
 //! and how it is driven (its body, or its collider).
 
-use crate::common::plate_scene;
+use crate::common::{cube_hull, plate_scene};
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -154,19 +154,7 @@ fn tool_shape(kind: u8, half: f32) -> (SharedShape, Rotation) {
             SharedShape::cuboid(half, half, half),
             Rotation::from_scaled_axis(Vector::new(0.3, 0.5, 0.2)),
         ),
-        2 => {
-            let corners: Vec<Vector> = (0..8)
-                .map(|c| {
-                    Vector::new(
-                        if c & 1 == 0 { -half } else { half },
-                        if c & 2 == 0 { -half } else { half },
-                        if c & 4 == 0 { -half } else { half },
-                    )
-                })
-                .collect();
-            let hull = SharedShape::convex_hull(&corners).unwrap();
-            (hull, Rotation::IDENTITY)
-        }
+        2 => (cube_hull(half), Rotation::IDENTITY),
         3 => (SharedShape::ball(half), Rotation::IDENTITY),
         4 => (SharedShape::cylinder(half, half), Rotation::IDENTITY),
         _ => (

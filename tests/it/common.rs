@@ -350,6 +350,21 @@ pub fn plate_scene(
     (world, set, tool, h)
 }
 
+/// A cube of half-size `half` as a convex hull of its corners (parry's `ConvexPolyhedron`,
+/// whose point queries take another path than a cuboid's).
+pub fn cube_hull(half: f32) -> rapier_touch::rapier3d::prelude::SharedShape {
+    let corners: Vec<Vector> = (0..8)
+        .map(|c| {
+            Vector::new(
+                if c & 1 == 0 { -half } else { half },
+                if c & 2 == 0 { -half } else { half },
+                if c & 4 == 0 { -half } else { half },
+            )
+        })
+        .collect();
+    rapier_touch::rapier3d::prelude::SharedShape::convex_hull(&corners).expect("a cube's hull")
+}
+
 /// Proptest strategies shared by the property tests.
 pub mod strategies {
     use proptest::prelude::*;

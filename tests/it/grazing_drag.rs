@@ -11,7 +11,7 @@
 //! and tool: a box, a cylinder, and the same box as a convex hull (parry's `ConvexPolyhedron`,
 //! whose point queries take another path).
 
-use crate::common::plate_scene;
+use crate::common::{cube_hull, plate_scene};
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -35,18 +35,7 @@ fn drag(scale: f32, k: f32, mass: f32, substeps: u32, shape: u8, direction: f32)
     let shape = match shape {
         0 => SharedShape::cuboid(half, half, half),
         1 => SharedShape::cylinder(half, half),
-        _ => {
-            let corners: Vec<Vector> = (0..8)
-                .map(|c| {
-                    Vector::new(
-                        if c & 1 == 0 { -half } else { half },
-                        if c & 2 == 0 { -half } else { half },
-                        if c & 4 == 0 { -half } else { half },
-                    )
-                })
-                .collect();
-            SharedShape::convex_hull(&corners).unwrap()
-        }
+        _ => cube_hull(half),
     };
     let (mut world, mut set, tool, _) = plate_scene(size, 24, k, mass, substeps, shape);
     let body = world.colliders[tool].parent().unwrap();
