@@ -277,7 +277,7 @@ pub(super) fn hold_vertices(
 /// tangential motion was not, and the springs sped it up where it could not move. A plate
 /// vertex lying on a cube's face that circled over it entered by a micrometre at every
 /// substep, was put back where it had been, and reached 4 m/s in place, the plate's energy
-/// rising from 1.4 mJ to 65 mJ in 2 s under a tool that did 0.1 µJ of work a step.
+/// rising from 1.4 mJ to 65 mJ in 2.4 s under a tool that did 0.1 µJ of work a step.
 fn slid_on(
     shape: &dyn parry3d::shape::Shape,
     pose: &Pose,
