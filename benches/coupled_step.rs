@@ -150,7 +150,9 @@ fn scene_sized(
 }
 
 impl Scene {
-    /// One coupled step with a rigid step that only moves the tools.
+    /// One coupled step with a rigid step that only moves the tools (their colliders'
+    /// `set_position`, the bodies left where the pressing put them: the coupling starts each
+    /// tool where its collider ended the last step, `tests/it/circling_tools.rs`).
     fn full_step(&mut self) {
         self.t += self.world.integration_parameters.dt;
         let (t, n) = (self.t, self.tools.len());
