@@ -110,7 +110,9 @@ impl SurfaceHandle {
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct AttachOptions {
     /// Surface steps per rigid step (a 1 kHz surface in a 60 Hz scene: 17). The surface's time
-    /// step becomes the world's `dt / substeps`. Default 1.
+    /// step becomes the world's `dt / substeps`, and follows the world's `dt` when it changes
+    /// (the filter refactored once per change; a world's `dt` of zero steps no surface).
+    /// Default 1.
     pub substeps: u32,
     /// Give the body a TriMesh collider that follows the deformed surface (updated once per
     /// rigid step). It adds no mass to the body (the surface's masses are its own): give a

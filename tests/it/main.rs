@@ -43,3 +43,4 @@ mod surface_bvh;
 mod swept_partners;
 mod tool_shapes;
 mod toppling;
+mod world_step;

@@ -196,6 +196,22 @@ impl SurfaceSet {
         for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
             let h = dt / n as Real;
+            // The surface steps at the world's step over its substeps. A world whose step
+            // changed since the surface was attached (a game's slow motion, a variable step)
+            // changes the surface's, its filter refactored once per change: kept at the step
+            // it was attached with, a plate attached at 60 Hz and stepped at 1 kHz moved its
+            // tools a millisecond a step while it stepped 16.7 ms, and read their forces (its
+            // impulses over the world's step) 16.7 times too large. A step rapier would not
+            // take (zero, negative, not finite: a paused world) steps no surface either.
+            if !(h > 0.0 && h.is_finite()) {
+                continue;
+            }
+            if (s.surface.dt() - h).abs() > 1e-6 * h {
+                if let Err(e) = s.surface.set_dt(h) {
+                    log::warn!("rapier_touch: a surface kept its time step ({e}): not stepped");
+                    continue;
+                }
+            }
             let mut states = dynamic.clone();
             for k in 1..=n {
                 for d in states.iter_mut() {
