@@ -68,8 +68,8 @@ pub(super) fn hold_vertices(
     // the substep. It is still in contact (and snapped back) unless its springs pull it away
     // (the push-only test below).
     // (vertex, normal, contact point in the tool's frame, stuck in the last substep, the way
-    // from the tool to a vertex found outside it)
-    let mut held: Vec<(u32, Vector, Vector, bool, Option<Vector>)> = Vec::new();
+    // from the tool to a vertex found outside it, its velocity before the hold)
+    let mut held: Vec<(u32, Vector, Vector, bool, Option<Vector>, Vector)> = Vec::new();
     // (vertex, its free position and velocity) for vertices that followed the tool.
     let mut followed: Vec<(u32, Vector, Vector)> = Vec::new();
     for &iu in candidates {
@@ -182,6 +182,7 @@ pub(super) fn hold_vertices(
                 _ => v,
             }
         };
+        let before = surface.velocity(iu);
         if surface.set_state(iu, out, v).is_ok() {
             let _ = if stuck.is_some() {
                 surface.hold(iu)
@@ -192,7 +193,7 @@ pub(super) fn hold_vertices(
             // from the tool's nearest point, which under an edge or a corner is not the
             // face's normal `n`.
             let away = (gap > margin).then(|| (-moved).try_normalize()).flatten();
-            held.push((iu, n, local, stuck.is_some(), away));
+            held.push((iu, n, local, stuck.is_some(), away, before));
         }
     }
     // Contact only pushes: a held vertex whose springs pull it away from the tool (it would
@@ -216,16 +217,24 @@ pub(super) fn hold_vertices(
     } else {
         Real::MAX
     };
-    for &(i, n, local, was_stuck, away) in &held {
+    for &(i, n, local, was_stuck, away, before) in &held {
         let f = surface.internal_force(i);
         let (on_tool, next) = if grasp {
             // Grasped: stuck whatever its springs do, pulled or pushed; the tool feels it all.
             (f, Settled::Stick)
         } else if f.dot(n) >= 0.0 || away.is_some_and(|d| f.dot(d) >= 0.0) {
             surface.release(i);
-            // A vertex that only followed the tool separates where its own motion took it.
             if let Some(&(_, p, v)) = followed.iter().find(|f| f.0 == i) {
+                // A vertex that only followed the tool separates where its own motion took it.
                 let _ = surface.set_state(i, p, v);
+            } else if (surface.velocity(i) - before).dot(n) < 0.0 {
+                // Nor does a vertex let go keep a pull: one the hold gave the tool's normal
+                // velocity toward it (a vertex found a hair inside a receding wall) leaves
+                // with its own. Kept, that pull sped a plate vertex beside a cylinder's side up
+                // toward it at every substep, each time let go: at a 4 kHz surface step a
+                // slow cylinder put 7 mJ into a heavy plate in 2 s, its reaction reading no
+                // work (the vertices' springs along the wall's normal).
+                let _ = surface.set_state(i, surface.position(i), before);
             }
             continue;
         } else {
