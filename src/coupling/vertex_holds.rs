@@ -34,10 +34,11 @@ pub(super) struct Holds {
 /// the tool's, to the tool's boundary, and slides on from there along the face it entered by
 /// for the rest of the substep ([`slid_on`]). A vertex already in contact slides: it is
 /// snapped to the nearest boundary point, keeps its own tangential velocity and takes the
-/// tool's normal velocity. With friction ([`super::friction`]) a vertex that sticks is carried by the tool's
-/// material point it stuck to, with that point's whole velocity, until its tangential force
-/// passes the static limit; a slipping vertex is pulled back by kinetic friction. A grasping
-/// tool keeps every vertex it touches stuck, pulled or pushed, until it lets go.
+/// tool's normal velocity. With friction ([`super::friction`]) a vertex that sticks is carried
+/// by the tool's material point it stuck to, with that point's whole velocity, until its
+/// tangential force passes the static limit; a slipping vertex is pulled back by kinetic
+/// friction. A grasping tool keeps every vertex it touches stuck, pulled or pushed, until it
+/// lets go.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hold_vertices(
     (tool, friction, grasp, record, sticks): (ColliderHandle, Friction, bool, bool, &mut Sticks),
