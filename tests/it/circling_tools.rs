@@ -279,10 +279,10 @@ fn slow_tools_on_heavy_plates_stepped_at_4_khz_put_in_no_more_than_their_work() 
 proptest! {
     // After the fixes 20 seeds of 16 cases pass, and CI's (surfaces stepped at 60 Hz to
     // 4 kHz). The largest rises are under cylinders (0.95 of the bound at one seed while the
-    // surface still kept its 60 Hz step): a cylinder's rim does not
-    // press the plate's triangles as a polyhedron's edges do, so the plate's vertices meet
-    // its side and are pushed along, the work going into the plate. Before the fixes, a tool
-    // driven by its collider failed at every seed tried (4 of 4).
+    // surface still kept its 60 Hz step): a cylinder's rim does not press the plate's
+    // triangles as a polyhedron's edges do, so the plate's vertices meet its side and are
+    // pushed along, the work going into the plate. Before the fixes, a tool driven by its
+    // collider failed at every seed tried (4 of 4).
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
     #[test]
