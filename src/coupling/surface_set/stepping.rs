@@ -127,14 +127,9 @@ impl SurfaceSet {
             // step puts an awake body's colliders back on it). Six kinematic cubes moved that
             // way in a bench started every step from their bodies' first pose, up to 10 mm
             // off: each step swept them through the plate, which rose from 5 mJ to 3 J.
-            t.prev = colliders.get(*h).map(|c| {
-                let parent = c.parent().and_then(|b| bodies.get(b));
-                match (parent, c.position_wrt_parent()) {
-                    (Some(b), Some(local)) if t.seen_on_body != Some(*b.position() * *local) => {
-                        *b.position() * *local
-                    }
-                    _ => *c.position(),
-                }
+            t.prev = colliders.get(*h).map(|c| match pose_on_body(c, bodies) {
+                Some(on_body) if t.seen_on_body != Some(on_body) => on_body,
+                _ => *c.position(),
             });
             let body = colliders.get(*h).and_then(|c| c.parent());
             if let Some(fed) = body.and_then(|b| Fed::add(bodies, b, t.feed)) {
@@ -362,10 +357,17 @@ impl SurfaceSet {
         }
         crate::hooks::sync_moved_colliders(world, &mut moved);
         for (h, t) in self.tools.iter_mut() {
-            t.seen_on_body = world.colliders.get(*h).and_then(|c| {
-                let b = world.bodies.get(c.parent()?)?;
-                Some(*b.position() * *c.position_wrt_parent()?)
-            });
+            t.seen_on_body = world
+                .colliders
+                .get(*h)
+                .and_then(|c| pose_on_body(c, &world.bodies));
         }
     }
+}
+
+/// Collider `c`'s pose on its parent body as the body stands now (its body's pose times its
+/// pose on the body), or `None` for a collider without a body.
+fn pose_on_body(c: &rapier3d::geometry::Collider, bodies: &RigidBodySet) -> Option<Pose> {
+    let b = bodies.get(c.parent()?)?;
+    Some(*b.position() * *c.position_wrt_parent()?)
 }
