@@ -27,7 +27,7 @@
 //! the tool (a box flat or turned, the box as a convex hull, a ball, a cylinder, a capsule)
 //! and how it is driven (its body, or its collider).
 
-use crate::common::{cube_hull, plate_scene};
+use crate::common::{cube_hull, lowest_point, plate_scene};
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -127,11 +127,7 @@ fn circle(
     world.integration_parameters.dt = 1.0 / rate;
     set.add_tool(tool, &mut world).unwrap();
     // The lowest point of the turned tool below its centre.
-    let reach = world.colliders[tool]
-        .shape()
-        .compute_aabb(&Pose::from_parts(Vector::ZERO, turned))
-        .mins
-        .y;
+    let reach = lowest_point(world.colliders[tool].shape(), turned);
     let depth = half / 3.0;
     let path = |t: f32| {
         let top = -reach + 0.2 * half;
@@ -200,11 +196,7 @@ fn bench_cube(turned: bool, drive: Drive) -> Books {
     } else {
         Rotation::IDENTITY
     };
-    let reach = world.colliders[tool]
-        .shape()
-        .compute_aabb(&Pose::from_parts(Vector::ZERO, rotation))
-        .mins
-        .y;
+    let reach = lowest_point(world.colliders[tool].shape(), rotation);
     let path = |t: f32| {
         let y = -reach + 0.05 - (0.05 + 0.006) * (2.0 * t).min(1.0);
         let a = (t - 1.0).max(0.0) * 6.0;

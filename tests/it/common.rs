@@ -350,6 +350,15 @@ pub fn plate_scene(
     (world, set, tool, h)
 }
 
+/// How far below its centre `shape` reaches when turned by `rotation` (negative: the height
+/// of its lowest point over its centre).
+pub fn lowest_point(shape: &dyn parry3d::shape::Shape, rotation: Rotation) -> f32 {
+    shape
+        .compute_aabb(&Pose::from_parts(Vector::ZERO, rotation))
+        .mins
+        .y
+}
+
 /// A cube of half-size `half` as a convex hull of its corners (parry's `ConvexPolyhedron`,
 /// whose point queries take another path than a cuboid's).
 pub fn cube_hull(half: f32) -> rapier_touch::rapier3d::prelude::SharedShape {

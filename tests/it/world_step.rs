@@ -7,7 +7,7 @@
 //! 14.7 N), and a paused world's surfaces kept moving. A ball's force (its held vertex's
 //! springs) was right.
 
-use crate::common::plate_scene;
+use crate::common::{lowest_point, plate_scene};
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
 
@@ -27,10 +27,7 @@ fn a_still_tool_keeps_its_force_when_the_worlds_step_changes_and_a_paused_world_
 /// of 3 cm half-size turned and placed by `at` pressed 1 cm in over half a second and held,
 /// then the world's step changed to 240, 1000 and 30 Hz, and to zero.
 fn still_tool(shape: SharedShape, at: Pose) {
-    let lowest = shape
-        .compute_aabb(&Pose::from_parts(Vector::ZERO, at.rotation))
-        .mins
-        .y;
+    let lowest = lowest_point(&*shape, at.rotation);
     let (mut world, mut set, tool, plate) = plate_scene(0.3, 16, 400.0, 0.2, 4, shape);
     set.add_tool(tool, &mut world).unwrap();
     let body = world.colliders[tool].parent().unwrap();
