@@ -447,7 +447,8 @@ fn contacts_with_rings(
                 let (q_lo, q_hi) = (q0.min(q1) - grown, q0.max(q1) + grown);
                 all_edges = (all_edges.0.min(q_lo), all_edges.1.max(q_hi));
                 edge_boxes.push((q_lo, q_hi));
-                surface_edges.push((i, j, q0, q1, *n, *moved));
+                let f_dir = q1 - q0;
+                surface_edges.push((i, j, q0, q1, f_dir, f_dir.length_squared(), *n, *moved));
             }
         }
     }
@@ -467,20 +468,24 @@ fn contacts_with_rings(
         if all_edges.0.cmpgt(hi).any() || lo.cmpgt(all_edges.1).any() {
             continue;
         }
-        for (&(q_lo, q_hi), &(i, j, q0, q1, n, moved)) in edge_boxes.iter().zip(&surface_edges) {
+        let e_dir = p1 - p0;
+        let e_len2 = e_dir.length_squared();
+        // Frictionless: a force along the tool's edge has no contact to act on.
+        let Some(e_unit) = e_dir.try_normalize() else {
+            continue;
+        };
+        for (&(q_lo, q_hi), &(i, j, q0, q1, f_dir, f_len2, n, moved)) in
+            edge_boxes.iter().zip(&surface_edges)
+        {
             if q_lo.cmpgt(hi).any() || lo.cmpgt(q_hi).any() {
                 continue;
             }
             // Nearly parallel edges cross at no definite point: the tool's vertices and the
-            // surface's own vertices carry such a contact.
-            let (e_dir, f_dir) = (p1 - p0, q1 - q0);
-            if e_dir.cross(f_dir).length() < MIN_EDGE_SINE * e_dir.length() * f_dir.length() {
+            // surface's own vertices carry such a contact. (|e × f| < sin |e| |f|, squared.)
+            let sine2 = MIN_EDGE_SINE * MIN_EDGE_SINE;
+            if e_dir.cross(f_dir).length_squared() < sine2 * e_len2 * f_len2 {
                 continue;
             }
-            // Frictionless: a force along the tool's edge has no contact to act on.
-            let Some(e_unit) = e_dir.try_normalize() else {
-                continue;
-            };
             // Along the triangle's normal less its part along the tool's edge.
             let Some(u) = (-(n - e_unit * e_unit.dot(n)))
                 .try_normalize()
