@@ -309,6 +309,10 @@ pub struct MassSpringSurface {
     /// Forces the holders add on held vertices (friction on a sliding hold), until released.
     held_forces: Vec<(u32, DVec3)>,
     any_held: bool,
+    /// Each held vertex's hold impulse over the last step ([`Self::hold_impulse`]); zero
+    /// elsewhere (`hold_impulse_set`: some entry may be non-zero).
+    hold_impulse: Vec<DVec3>,
+    hold_impulse_set: bool,
     point_holds: Vec<PointHold>,
     /// The rigid holders the point holds may name ([`Self::set_holders`]).
     holders: Vec<HolderState>,

@@ -313,6 +313,8 @@ impl MassSpringSurfaceBuilder {
             held: vec![false; n],
             held_normal: vec![DVec3::ZERO; n],
             held_forces: Vec::new(),
+            hold_impulse: vec![DVec3::ZERO; n],
+            hold_impulse_set: false,
             any_held: false,
             point_holds: Vec::new(),
             holders: Vec::new(),

@@ -199,6 +199,17 @@ impl MassSpringSurface {
     pub fn is_held(&self, i: u32) -> bool {
         self.held.get(i as usize).copied().unwrap_or(false)
     }
+    /// The impulse (N·s) the holder of vertex `i` gave it over the last step: the part of its
+    /// force the hold took (all of it for a full hold, the part along the normal for a sliding
+    /// one) and the constraint solve's impulse that kept its held velocity. Summed over what a
+    /// tool held, it is what the tool gave the surface through its vertex holds (its point
+    /// presses' is [`Self::point_momentum`]). Zero for a vertex not held in the last step or
+    /// out of range; under the Baraff-Witkin integrator, only the force's part.
+    pub fn hold_impulse(&self, i: u32) -> Vector {
+        self.hold_impulse
+            .get(i as usize)
+            .map_or(Vector::ZERO, |j| j.as_vec3())
+    }
     /// The normal a sliding hold on vertex `i` supports; zero for a full hold, a vertex not
     /// held, or one out of range.
     pub(crate) fn held_normal(&self, i: u32) -> Vector {

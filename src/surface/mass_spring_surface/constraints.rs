@@ -37,13 +37,12 @@ pub(super) fn constrain(
     holders: &mut [HolderState],
     free: &[u32],
     free_index: &[u32],
-    held: &[bool],
-    held_normal: &[DVec3],
+    (held, held_normal, hold_impulse): (&[bool], &[DVec3], &mut [DVec3]),
     points: &mut [PointHold],
     vel: &[DVec3],
     dv: &mut [DVec3],
     memory: &mut ActiveMemory,
-) {
+) -> DVec3 {
     let Some(Rows {
         list,
         cons,
@@ -52,7 +51,7 @@ pub(super) fn constrain(
         known,
     }) = rows(free, free_index, held, held_normal, points)
     else {
-        return;
+        return DVec3::ZERO;
     };
     let h = list.len();
     // The rows on rigid holders, and the holder's compliance between two rows.
@@ -582,15 +581,30 @@ pub(super) fn constrain(
     }
     let mut impulse = vec![DVec3::ZERO; h];
     for (c, (d, e, n, row)) in cons.iter().enumerate() {
+        let mut weight = 0.0;
         for &(k, w) in &e[..*n] {
             impulse[k] += *d * (w * lambda[c]);
+            weight += w;
         }
         match *row {
-            Row::Normal(pi) => points[pi].impulse += lambda[c],
-            Row::Tangent(pi) => points[pi].tangent_impulse += *d * lambda[c],
-            Row::Vertex => {}
+            Row::Normal(pi) => {
+                points[pi].impulse += lambda[c];
+                points[pi].momentum += *d * (weight * lambda[c]);
+            }
+            Row::Tangent(pi) => {
+                points[pi].tangent_impulse += *d * lambda[c];
+                points[pi].momentum += *d * (weight * lambda[c]);
+            }
+            Row::Vertex => {
+                // The vertex hold's impulse (`MassSpringSurface::hold_impulse`).
+                let v = list.get(e[0].0).and_then(|&fi| free.get(fi as usize));
+                if let Some(slot) = v.and_then(|&v| hold_impulse.get_mut(v as usize)) {
+                    *slot += *d * lambda[c];
+                }
+            }
         }
     }
     filter.add_impulses(&list, &impulse, dv);
     give_impulses(&holder_rows, &lambda, holders);
+    impulse.iter().sum()
 }

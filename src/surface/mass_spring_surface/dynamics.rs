@@ -107,10 +107,30 @@ impl MassSpringSurface {
         for &(i, f) in &self.held_forces {
             self.force[i as usize] += f;
         }
+        // A holder takes what it holds of a held vertex's force: that part, over the step, is
+        // the first part of the hold's impulse on it (the constraint solve adds the rest).
+        // (`held_forces` are in the force already, along the tangent plane only.)
         if self.any_held {
+            let dt = self.dt;
             for i in 0..self.force.len() {
-                self.force[i] = self.unheld_part(i, self.force[i]);
+                let kept = self.unheld_part(i, self.force[i]);
+                self.hold_impulse[i] = if self.held[i] {
+                    (kept - self.force[i]) * dt
+                } else {
+                    DVec3::ZERO
+                };
+                self.force[i] = kept;
             }
+            // A holder's own pull on a vertex (kinetic friction) is its impulse too.
+            for &(i, f) in &self.held_forces {
+                if self.held[i as usize] {
+                    self.hold_impulse[i as usize] += f * dt;
+                }
+            }
+            self.hold_impulse_set = true;
+        } else if self.hold_impulse_set {
+            self.hold_impulse.fill(DVec3::ZERO);
+            self.hold_impulse_set = false;
         }
     }
 
@@ -268,24 +288,50 @@ impl MassSpringSurface {
             h.angular_impulse = DVec3::ZERO;
         }
         if self.any_held || !self.point_holds.is_empty() {
-            constrain(
+            // The same correction for the constraint solve's impulses, which reach the
+            // vertices through the same truncated columns (a free surface only).
+            let rigid = self.free.len() == self.home.len()
+                && matches!(filter.kind(), FilterKind::Neighbour { .. });
+            let momentum = |dv: &[DVec3], free: &[u32], mass: &[f64]| {
+                dv.iter()
+                    .zip(free)
+                    .map(|(dv, &v)| *dv * mass[v as usize])
+                    .sum::<DVec3>()
+            };
+            let before = if rigid {
+                momentum(&self.dv, &self.free, &self.mass)
+            } else {
+                DVec3::ZERO
+            };
+            let applied = constrain(
                 filter,
                 &mut self.holders,
                 &self.free,
                 &self.free_index,
-                &self.held,
-                &self.held_normal,
+                (&self.held, &self.held_normal, &mut self.hold_impulse),
                 &mut self.point_holds,
                 &self.vel,
                 &mut self.dv,
                 &mut self.pushing,
             );
+            if rigid {
+                let got = momentum(&self.dv, &self.free, &self.mass) - before;
+                let total: f64 = self.free.iter().map(|&v| self.mass[v as usize]).sum();
+                if total > 0.0 {
+                    let gamma = (applied - got) / total;
+                    self.dv.iter_mut().for_each(|dv| *dv += gamma);
+                }
+            }
         }
         let mut probe = 0.0;
         for (fi, &v) in self.free.iter().enumerate() {
             let i = v as usize;
-            // A held vertex keeps the holder's normal velocity.
+            // A held vertex keeps the holder's normal velocity (what the solve left of a
+            // velocity change along it is the hold's too).
             let dv = self.unheld_part(i, self.dv[fi]);
+            if self.held[i] {
+                self.hold_impulse[i] -= (self.dv[fi] - dv) * self.mass[i];
+            }
             self.vel[i] += dv;
             self.pos[i] += self.vel[i] * dt;
             probe += self.pos[i].element_sum();

@@ -32,6 +32,9 @@ pub(crate) struct PointHold {
     pub(super) cone: Option<(f64, f64)>,
     /// The impulse (N·s, in the tangent plane) the holder gave carrying it.
     pub(super) tangent_impulse: DVec3,
+    /// The momentum its press and the step's impulses gave the vertices that moved with it
+    /// ([`MassSpringSurface::point_momentum`]).
+    pub(super) momentum: DVec3,
     /// The weight on vertices held when it was pressed: their holders keep them where they
     /// are, so that share of its impulses goes into them, not into the surface.
     pub(super) held_share: f64,

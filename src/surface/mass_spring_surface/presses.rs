@@ -351,12 +351,15 @@ impl MassSpringSurface {
                 let hold = &mut kept[i].0;
                 // The impulse the press gave: the start of what the hold reports.
                 hold.impulse = nu[r];
+                let mut moved = 0.0;
                 for (v, w) in hold.entries() {
                     let share = w * inv_mass(self, v);
                     self.pos[v as usize] += hold.normal * (share * mu[i]);
                     motion_watch::note(&mut self.watch, v as usize, self.pos[v as usize]);
                     self.vel[v as usize] += hold.normal * (share * nu[r]);
+                    moved += share * self.mass[v as usize];
                 }
+                hold.momentum = hold.normal * (moved * nu[r]);
             }
             // A press left out is `gap` short of its holder (its own negative depth, or where
             // the others' pushes put it): it is held as a speculative contact that may close
@@ -439,6 +442,7 @@ impl MassSpringSurface {
             carried,
             cone,
             tangent_impulse: DVec3::ZERO,
+            momentum: DVec3::ZERO,
             held_share: 0.0,
             holder: p.holder.map(|(k, point)| (k, point.as_dvec3())),
         };
@@ -464,6 +468,17 @@ impl MassSpringSurface {
         self.point_holds
             .get(id)
             .map(|h| (h.impulse * (1.0 - h.held_share)) as Real)
+    }
+
+    /// The momentum (N·s) hold `id` of [`MassSpringSurface::press_points`] has given the
+    /// surface's vertices: the press's own velocity change and the filtered step's impulses
+    /// on the vertices that moved with it, along its normal and (with friction or a grasp)
+    /// its tangent plane. Where [`MassSpringSurface::point_impulse`] leaves out the share of
+    /// a vertex held when it was pressed, this is what the vertices took, as the holds'
+    /// [`MassSpringSurface::hold_impulse`] is: the two sum to the momentum the holders gave
+    /// the surface. `None` for no such hold.
+    pub fn point_momentum(&self, id: usize) -> Option<Vector> {
+        self.point_holds.get(id).map(|h| h.momentum.as_vec3())
     }
 
     /// The impulse (N·s, in its tangent plane) the holder of hold `id` of
