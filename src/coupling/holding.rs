@@ -8,7 +8,7 @@ use super::dynamic_tools::{
 };
 use super::friction::Friction;
 use super::pressing::{
-    add_grasped, find_contacts, part_query, press_all, reaction_of, record_grasped,
+    add_grasped, find_contacts, momentum_of, part_query, press_all, reaction_of, record_grasped,
     record_impulses, Grasper, PressOwner,
 };
 use super::surface_set::{AttachedSurface, SurfaceHandle, ToolReaction};
@@ -154,10 +154,18 @@ pub(super) fn surface_substep(
     // The dynamic tools hold at their velocities now, with their masses (their holder
     // indices are their places in `dynamic`; none clears the last step's holders).
     set_holders(&mut s.surface, dynamic, &inv, 0.0);
-    retarget_holds(&mut s.surface, &s.held_list, world, tools, &inv, h);
+    // What each kinematic tool gives the surface through its vertex holds over the substep
+    // (surface frame): the velocities it sets before the step, then the holds' impulses
+    // through it.
+    let mut given = retarget_holds(&mut s.surface, &s.held_list, world, tools, &inv, h);
     s.surface.positions_into(&mut s.before);
     s.surface.step();
     record_impulses(&s.surface, &mut s.pressed);
+    given.extend(
+        s.held_by
+            .iter()
+            .map(|&(v, tool)| (tool, s.surface.hold_impulse(v))),
+    );
     // (The tools' list is copied only to change the dynamic ones' motions.)
     let moved;
     let tools = if dynamic.is_empty() {
@@ -184,6 +192,7 @@ pub(super) fn surface_substep(
     s.search.refresh(&mut s.surface, &s.scratch, &s.before);
     let mut out = Vec::with_capacity(tools.len());
     let mut now_held = Vec::new();
+    s.held_by.clear();
     // The dynamic tools' vertex contacts, pressed with the sharp features' below.
     let (mut vertex_presses, mut vertex_velocities, mut vertex_owners) =
         (Vec::new(), Vec::new(), Vec::new());
@@ -246,9 +255,27 @@ pub(super) fn surface_substep(
             (&s.scratch, &s.search.vertices),
         );
         now_held.extend_from_slice(&holds.vertices);
+        s.held_by
+            .extend(holds.vertices.iter().map(|&v| (v, t.handle)));
         let (pf, pm, pn) = reaction_of(&s.last_pressed, t.handle, h);
         let (force, arm_sum) = (holds.force + pf, holds.moment + pm);
         let world_force = body_pose.rotation * force;
+        // Over the substep the tool took back what it gave the surface through its holds (the
+        // velocities it set and the holds' impulses through the step, and the velocity changes
+        // of the vertices it took hold of or let go at its end) and through its points (their
+        // presses and the step's impulses on them): its momentum books balance with the
+        // surface's.
+        let held_given = given
+            .iter()
+            .filter(|g| g.0 == t.handle)
+            .map(|g| g.1)
+            .sum::<Vector>()
+            + holds.given;
+        let mean_force = if h > 0.0 {
+            body_pose.rotation * -((held_given + momentum_of(&s.last_pressed, t.handle)) / h)
+        } else {
+            world_force
+        };
         let centre = tool
             .parent()
             .and_then(|b| world.bodies.get(b))
@@ -267,7 +294,7 @@ pub(super) fn surface_substep(
             ToolReaction {
                 force: world_force,
                 torque,
-                mean_force: world_force,
+                mean_force,
                 held_vertices: holds.count,
                 sticking_vertices: holds.sticking,
                 pressed_points: pn,
@@ -330,6 +357,18 @@ pub(super) fn surface_substep(
             &owners,
             &mut s.pressed,
         );
+        // The presses' velocity changes are the tools' impulses in this substep.
+        if h > 0.0 {
+            for (handle, reaction, _) in out.iter_mut() {
+                let given = s
+                    .pressed
+                    .iter()
+                    .filter(|p| p.tool == *handle)
+                    .map(|p| p.pressed_momentum)
+                    .sum::<Vector>();
+                reaction.mean_force -= body_pose.rotation * (given / h);
+            }
+        }
         let new = ..first_grasped.min(ids.len());
         record_grasped(
             &mut s.grasped,
@@ -356,11 +395,20 @@ fn retarget_holds(
     tools: &[ToolMotion],
     inv: &Pose,
     h: Real,
-) {
+) -> Vec<(ColliderHandle, Vector)> {
+    let mut given = Vec::new();
     if h <= 0.0 {
-        return;
+        return given;
     }
-    let poses: Vec<(&dyn parry3d::shape::Shape, Pose, Pose, Aabb, Real)> = tools
+    type Holder<'a> = (
+        &'a dyn parry3d::shape::Shape,
+        Pose,
+        Pose,
+        Aabb,
+        Real,
+        ColliderHandle,
+    );
+    let poses: Vec<Holder> = tools
         .iter()
         .filter_map(|t| {
             let collider = world.colliders.get(t.handle)?;
@@ -378,34 +426,37 @@ fn retarget_holds(
             let (start, end) = (*inv * t.start, *inv * t.end);
             let aabb = shape.compute_aabb(&start);
             let margin = contact_margin(&aabb, 1e-3);
-            Some((shape, start, end, aabb.loosened(margin), margin))
+            Some((shape, start, end, aabb.loosened(margin), margin, t.handle))
         })
         .collect();
     if poses.is_empty() {
-        return;
+        return given;
     }
     for &i in held {
         if !surface.is_held(i) {
             continue;
         }
         let p = surface.position(i);
-        let holder = poses.iter().find(|(shape, start, _, aabb, margin)| {
+        let holder = poses.iter().find(|(shape, start, _, aabb, margin, _)| {
             aabb.contains_local_point(p) && distance_outside(*shape, start, p) <= *margin
         });
-        let Some((_, start, end, _, _)) = holder else {
+        let Some((_, start, end, _, _, tool)) = holder else {
             continue;
         };
         let local = start.inverse_transform_point(p);
         let tool_velocity = (end.transform_point(local) - p) / h;
         let n = surface.held_normal(i);
+        let own = surface.velocity(i);
         let v = if n == Vector::ZERO {
             tool_velocity
         } else {
-            let own = surface.velocity(i);
             own - n * own.dot(n) + n * tool_velocity.dot(n)
         };
-        let _ = surface.set_state(i, p, v);
+        if surface.set_state(i, p, v).is_ok() {
+            given.push((*tool, (v - own) * surface.mass(i)));
+        }
     }
+    given
 }
 
 /// The friction of tool `t` on surface `s`: the pair's own, or else the tool's.

@@ -36,6 +36,11 @@ pub(super) struct Pressed {
     /// The impulse the tool gave the point along its tangent plane through that step (N·s,
     /// friction), filled in by [`record_impulses`].
     pub tangent_impulse: Vector,
+    /// The momentum the hold gave the surface's vertices by its press (the velocity change,
+    /// booked in the substep it happened in), and by the press and the step after it
+    /// ([`MassSpringSurface::point_momentum`], filled in by [`record_impulses`]).
+    pub pressed_momentum: Vector,
+    pub momentum: Vector,
 }
 
 /// The tool a contact belongs to, as [`press_all`] needs it.
@@ -55,7 +60,19 @@ pub(super) fn record_impulses(surface: &MassSpringSurface, pressed: &mut [Presse
     for p in pressed {
         p.impulse = surface.point_impulse(p.id).unwrap_or(0.0);
         p.tangent_impulse = surface.point_tangent_impulse(p.id).unwrap_or(Vector::ZERO);
+        p.momentum = surface.point_momentum(p.id).unwrap_or(Vector::ZERO);
     }
+}
+
+/// The momentum `tool`'s points gave the surface in the step just taken (surface frame): the
+/// step's impulses on them (their presses' velocity changes were booked when they were
+/// pressed, [`press_all`]).
+pub(super) fn momentum_of(pressed: &[Pressed], tool: ColliderHandle) -> Vector {
+    pressed
+        .iter()
+        .filter(|p| p.tool == tool)
+        .map(|p| p.momentum - p.pressed_momentum)
+        .sum()
 }
 
 /// Force (on the tool, surface frame), `Σ p × f` and count of the points `tool` pressed during
@@ -216,6 +233,8 @@ pub(super) fn press_all(
             point: c.point,
             impulse: 0.0,
             tangent_impulse: Vector::ZERO,
+            pressed_momentum: surface.point_momentum(id).unwrap_or(Vector::ZERO),
+            momentum: Vector::ZERO,
         });
     }
     ids

@@ -137,8 +137,15 @@ pub struct ToolReaction {
     pub force: Vector,
     /// Torque of those forces about the tool body's centre of mass (N·m, world frame).
     pub torque: Vector,
-    /// The force averaged over the rigid step's substeps (N): for a dynamic tool, the impulse
-    /// the surfaces gave it over the step, over the step's length.
+    /// The impulse the surfaces gave the tool over the rigid step, over the step's length
+    /// (N, world frame): the reverse of the momentum the tool gave them. For a dynamic tool,
+    /// what moved it; for a kinematic one, what its vertex holds gave (the velocities they
+    /// set, the part of the held vertices' forces they took, the constraint impulses that
+    /// kept them on the tool) and its points' presses and impulses, in the substep each
+    /// happened. On a free surface it balances the surface's momentum change exactly
+    /// (`tests/it/momentum_books.rs`); `force`, the springs at the end of the step, does not
+    /// (a tool striking a surface in one 60 Hz step reads several times the momentum it
+    /// gave).
     pub mean_force: Vector,
     /// Number of surface vertices the tool holds.
     pub held_vertices: usize,
@@ -164,6 +171,9 @@ pub struct AttachedSurface {
     pub(super) was_held: Vec<bool>,
     /// The vertices the tools held at the end of the last substep.
     pub(super) held_list: Vec<u32>,
+    /// Which tool holds each of those: the impulses of its holds through the next step are
+    /// its.
+    pub(super) held_by: Vec<(u32, ColliderHandle)>,
     /// Points the tools pressed in the current and the last substep.
     pub(super) pressed: Vec<Pressed>,
     pub(super) last_pressed: Vec<Pressed>,
@@ -440,6 +450,7 @@ impl SurfaceSet {
             before: verts.clone(),
             was_held: Vec::new(),
             held_list: Vec::new(),
+            held_by: Vec::new(),
             pressed: Vec::new(),
             last_pressed: Vec::new(),
             search: ContactSearch::default(),

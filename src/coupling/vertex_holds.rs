@@ -25,6 +25,9 @@ pub(super) struct Holds {
     /// Each held vertex's position and the force it puts on the tool (surface frame), when
     /// asked to record them.
     pub contacts: Vec<(Vector, Vector)>,
+    /// The momentum the tool gave the vertices it took hold of, kept or let go (their velocity
+    /// changes times their masses; surface frame).
+    pub given: Vector,
 }
 
 /// Moves every surface vertex the tool contains out of it and holds it there (see [`Holds`]).
@@ -210,6 +213,7 @@ pub(super) fn hold_vertices(
         sticking: 0,
         vertices: Vec::new(),
         contacts: Vec::new(),
+        given: Vector::ZERO,
     };
     // A vertex moving over the tool slower than this (a millionth of the tool's size per
     // substep) is at rest on it.
@@ -272,6 +276,10 @@ pub(super) fn hold_vertices(
             out.contacts.push((surface.position(i), on_tool));
         }
     }
+    out.given = held
+        .iter()
+        .map(|&(i, .., before)| (surface.velocity(i) - before) * surface.mass(i))
+        .sum();
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));
     out

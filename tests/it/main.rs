@@ -24,6 +24,7 @@ mod haptic_servo;
 mod haptics;
 mod main_loop;
 mod mesh_inputs;
+mod momentum_books;
 mod pair_events;
 mod pipeline;
 mod point_friction;

@@ -60,7 +60,7 @@ impl SurfaceSet {
                     held.extend(contacts);
                     total.force += r.force;
                     total.torque += r.torque;
-                    total.mean_force += r.force;
+                    total.mean_force += r.mean_force;
                     total.held_vertices += r.held_vertices;
                     total.sticking_vertices += r.sticking_vertices;
                     total.pressed_points += r.pressed_points;
@@ -238,7 +238,7 @@ impl SurfaceSet {
                 let substep = surface_substep(s, world, &body_pose, (&poses, &mut states), h);
                 for (th, r, contacts) in substep {
                     let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
-                    m.0 += r.force / n as Real;
+                    m.0 += r.mean_force / n as Real;
                     m.1 += r.torque / n as Real;
                     if k == n {
                         if r.held_vertices > 0 || r.pressed_points > 0 {
