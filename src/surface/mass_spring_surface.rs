@@ -309,10 +309,12 @@ pub struct MassSpringSurface {
     /// Forces the holders add on held vertices (friction on a sliding hold), until released.
     held_forces: Vec<(u32, DVec3)>,
     any_held: bool,
+    /// The held vertices (`held` true), each once.
+    held_list: Vec<u32>,
     /// Each held vertex's hold impulse over the last step ([`Self::hold_impulse`]); zero
-    /// elsewhere (`hold_impulse_set`: some entry may be non-zero).
+    /// elsewhere but at `hold_impulse_at` (the vertices held then).
     hold_impulse: Vec<DVec3>,
-    hold_impulse_set: bool,
+    hold_impulse_at: Vec<u32>,
     point_holds: Vec<PointHold>,
     /// The rigid holders the point holds may name ([`Self::set_holders`]).
     holders: Vec<HolderState>,

@@ -121,6 +121,9 @@ impl MassSpringSurface {
     /// [`SurfaceError::VertexOutOfRange`].
     pub fn hold(&mut self, i: u32) -> Result<(), SurfaceError> {
         self.check_vertex(i)?;
+        if !self.held[i as usize] {
+            self.held_list.push(i);
+        }
         self.held[i as usize] = true;
         self.held_normal[i as usize] = DVec3::ZERO;
         self.any_held = true;
@@ -182,6 +185,9 @@ impl MassSpringSurface {
     /// Releases vertex `i` if held.
     pub fn release(&mut self, i: u32) {
         if let Some(h) = self.held.get_mut(i as usize) {
+            if *h {
+                self.held_list.retain(|&v| v != i);
+            }
             *h = false;
         }
         self.held_forces.retain(|h| h.0 != i);
@@ -190,10 +196,11 @@ impl MassSpringSurface {
     pub fn release_all(&mut self) {
         self.point_holds.clear();
         self.held_forces.clear();
-        if self.any_held {
-            self.held.iter_mut().for_each(|h| *h = false);
-            self.any_held = false;
+        for &v in &self.held_list {
+            self.held[v as usize] = false;
         }
+        self.held_list.clear();
+        self.any_held = false;
     }
     /// Is vertex `i` held?
     pub fn is_held(&self, i: u32) -> bool {
