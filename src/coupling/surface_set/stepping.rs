@@ -186,7 +186,7 @@ impl SurfaceSet {
         }
         let mut changes = vec![MotionChange::default(); dynamic.len()];
         let mut supports = vec![(Vector::ZERO, Vector::ZERO); dynamic.len()];
-        let mut mean: HashMap<ColliderHandle, (Vector, Vector)> = HashMap::default();
+        let mut mean: HashMap<ColliderHandle, Vector> = HashMap::default();
         let mut touching = self.touch.take_spare();
         for (handle, s, body_pose) in attached_with_pose(&mut self.entries, world) {
             let n = s.substeps.max(1);
@@ -237,9 +237,7 @@ impl SurfaceSet {
                 }
                 let substep = surface_substep(s, world, &body_pose, (&poses, &mut states), h);
                 for (th, r, contacts) in substep {
-                    let m = mean.entry(th).or_insert((Vector::ZERO, Vector::ZERO));
-                    m.0 += r.mean_force / n as Real;
-                    m.1 += r.torque / n as Real;
+                    *mean.entry(th).or_insert(Vector::ZERO) += r.mean_force / n as Real;
                     if k == n {
                         if r.held_vertices > 0 || r.pressed_points > 0 {
                             touching.insert((th, handle));
@@ -299,7 +297,7 @@ impl SurfaceSet {
             }
         }
         for (th, t) in self.tools.iter_mut() {
-            t.reaction.mean_force = mean.get(th).map_or(Vector::ZERO, |m| m.0);
+            t.reaction.mean_force = mean.get(th).copied().unwrap_or(Vector::ZERO);
         }
         // Two-way coupling: the dynamic tools the surfaces touched take the motion they left
         // (their free motion from the step's start, changed by what each surface changed),
