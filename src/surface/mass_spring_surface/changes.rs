@@ -212,6 +212,28 @@ impl MassSpringSurface {
     /// tool held, it is what the tool gave the surface through its vertex holds (its point
     /// presses' is [`Self::point_momentum`]). Zero for a vertex not held in the last step or
     /// out of range; under the Baraff-Witkin integrator, only the force's part.
+    ///
+    /// # Example
+    /// A free plate (no pins, no gravity) with one vertex held moving down: the plate's
+    /// momentum changes by what the hold gave it.
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::surface::meshing::plate;
+    ///
+    /// let mut surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, 4, 4))
+    ///     .stiffness(50.0)
+    ///     .build()
+    ///     .unwrap();
+    /// let v = 12; // the middle vertex
+    /// surface.set_state(v, surface.position(v), Vector::new(0.0, -0.5, 0.0)).unwrap();
+    /// let before = surface.momentum();
+    /// surface.hold(v).unwrap();
+    /// surface.step();
+    /// let given = surface.hold_impulse(v);
+    /// // It kept the vertex going down against its springs, which pulled the plate after it.
+    /// assert!(given.y < 0.0);
+    /// assert!((surface.momentum() - before - given).length() < 1e-5);
+    /// ```
     pub fn hold_impulse(&self, i: u32) -> Vector {
         self.hold_impulse
             .get(i as usize)

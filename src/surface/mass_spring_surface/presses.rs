@@ -477,6 +477,29 @@ impl MassSpringSurface {
     /// a vertex held when it was pressed, this is what the vertices took, as the holds'
     /// [`MassSpringSurface::hold_impulse`] is: the two sum to the momentum the holders gave
     /// the surface. `None` for no such hold.
+    ///
+    /// # Example
+    /// A point pressed into a free plate at 0.2 m/s: the plate's momentum changes by the
+    /// press's, then by the step's impulses on it.
+    /// ```
+    /// use rapier_touch::prelude::*;
+    /// use rapier_touch::surface::meshing::plate;
+    ///
+    /// let mut surface = MassSpringSurfaceBuilder::from_mesh(&plate(1.0, 1.0, 4, 4))
+    ///     .build()
+    ///     .unwrap();
+    /// let [a, b, c] = surface.triangles()[10];
+    /// let down = Vector::new(0.0, -1.0, 0.0);
+    /// let third = 1.0 / 3.0;
+    /// let weights = [(a, third), (b, third), (c, third)];
+    /// let id = surface.press_point(&weights, down, 0.01, 0.2).unwrap().unwrap();
+    /// let pressed = surface.point_momentum(id).unwrap();
+    /// assert!((surface.momentum() - pressed).length() < 1e-6);
+    /// surface.step();
+    /// let given = surface.point_momentum(id).unwrap();
+    /// assert!((surface.momentum() - given).length() < 1e-5);
+    /// assert!(given.y < pressed.y); // it kept pushing the point down through the step
+    /// ```
     pub fn point_momentum(&self, id: usize) -> Option<Vector> {
         self.point_holds.get(id).map(|h| h.momentum.as_vec3())
     }
