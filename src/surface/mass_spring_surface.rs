@@ -18,6 +18,7 @@ mod constraints;
 mod dynamics;
 mod motion_watch;
 mod point_hold;
+mod press_reports;
 mod presses;
 mod rigid_holder;
 use baraff_witkin::CgScratch;

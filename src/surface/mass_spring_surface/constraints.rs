@@ -11,7 +11,7 @@ use super::rigid_holder::{give_impulses, merge_blocks, motion, HolderRow, Holder
 use crate::surface::filter::{Filter, FilterKind};
 use friction::{unit, Grip, HolderCuts, SlidingPoint, FRICTION_PASSES, HOLDER_FRICTION_PASSES};
 use glamx::DVec3;
-use rows::{rows, surface_independent, targets, Con, Row, Rows};
+use rows::{book_impulses, rows, surface_independent, targets, Con, Row, Rows};
 
 mod friction;
 mod rows;
@@ -579,31 +579,7 @@ pub(super) fn constrain(
             }
         }
     }
-    let mut impulse = vec![DVec3::ZERO; h];
-    for (c, (d, e, n, row)) in cons.iter().enumerate() {
-        let mut weight = 0.0;
-        for &(k, w) in &e[..*n] {
-            impulse[k] += *d * (w * lambda[c]);
-            weight += w;
-        }
-        match *row {
-            Row::Normal(pi) => {
-                points[pi].impulse += lambda[c];
-                points[pi].momentum += *d * (weight * lambda[c]);
-            }
-            Row::Tangent(pi) => {
-                points[pi].tangent_impulse += *d * lambda[c];
-                points[pi].momentum += *d * (weight * lambda[c]);
-            }
-            Row::Vertex => {
-                // The vertex hold's impulse (`MassSpringSurface::hold_impulse`).
-                let v = list.get(e[0].0).and_then(|&fi| free.get(fi as usize));
-                if let Some(slot) = v.and_then(|&v| hold_impulse.get_mut(v as usize)) {
-                    *slot += *d * lambda[c];
-                }
-            }
-        }
-    }
+    let impulse = book_impulses((&list, &cons, &lambda), free, points, hold_impulse);
     filter.add_impulses(&list, &impulse, dv);
     give_impulses(&holder_rows, &lambda, holders);
     impulse.iter().sum()

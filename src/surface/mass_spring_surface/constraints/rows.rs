@@ -255,3 +255,40 @@ pub(super) fn surface_independent(
         .map(|(_, &c)| c)
         .collect()
 }
+
+/// What the solved impulses `lambda` (one per row of `cons`, over the slots of `list`) give:
+/// the impulse on each slot, returned, and the books of each row's owner, its point hold's
+/// impulses and momentum or its held vertex's hold impulse (`hold_impulse`, by vertex).
+pub(super) fn book_impulses(
+    (list, cons, lambda): (&[u32], &[Con], &[f64]),
+    free: &[u32],
+    points: &mut [PointHold],
+    hold_impulse: &mut [DVec3],
+) -> Vec<DVec3> {
+    let mut impulse = vec![DVec3::ZERO; list.len()];
+    for (c, (d, e, n, row)) in cons.iter().enumerate() {
+        let mut weight = 0.0;
+        for &(k, w) in &e[..*n] {
+            impulse[k] += *d * (w * lambda[c]);
+            weight += w;
+        }
+        match *row {
+            Row::Normal(pi) => {
+                points[pi].impulse += lambda[c];
+                points[pi].momentum += *d * (weight * lambda[c]);
+            }
+            Row::Tangent(pi) => {
+                points[pi].tangent_impulse += *d * lambda[c];
+                points[pi].momentum += *d * (weight * lambda[c]);
+            }
+            Row::Vertex => {
+                // The vertex hold's impulse (`MassSpringSurface::hold_impulse`).
+                let v = list.get(e[0].0).and_then(|&fi| free.get(fi as usize));
+                if let Some(slot) = v.and_then(|&v| hold_impulse.get_mut(v as usize)) {
+                    *slot += *d * lambda[c];
+                }
+            }
+        }
+    }
+    impulse
+}
