@@ -50,11 +50,14 @@ struct Run {
     grip: Grip,
 }
 
-/// The plate's momentum change and the impulse the tool's reaction reports over the run,
-/// and the largest momentum the plate had (world frame).
-fn books(run: &Run) -> (Vector, Vector, f32) {
-    let size = run.size;
-    let cells = 16;
+/// A world with no gravity and, on a fixed body, a free plate (no pins) `size` wide of
+/// `cells` per side, edges of `k` with light dampers, `mass` in all, stepped in `substeps`.
+fn free_plate(
+    (size, cells): (f32, u32),
+    k: f32,
+    mass: f32,
+    substeps: u32,
+) -> (PhysicsWorld, SurfaceSet, SurfaceHandle) {
     let mut world = PhysicsWorld {
         gravity: Vector::ZERO,
         ..Default::default()
@@ -62,17 +65,25 @@ fn books(run: &Run) -> (Vector, Vector, f32) {
     world.integration_parameters.length_unit = size;
     let fixed = world.insert_body(RigidBodyBuilder::fixed());
     let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
-        .stiffness(run.k)
-        .damping(0.02 * (run.k * run.mass).sqrt() / cells as f32)
-        .mass(MassDistribution::Total(run.mass))
+        .stiffness(k)
+        .damping(0.02 * (k * mass).sqrt() / cells as f32)
+        .mass(MassDistribution::Total(mass))
         .build()
         .unwrap();
     let mut set = SurfaceSet::new();
     let options = AttachOptions {
-        substeps: run.substeps,
+        substeps,
         collider: true,
     };
     let soft = set.insert(surface, fixed, &mut world, options).unwrap();
+    (world, set, soft)
+}
+
+/// The plate's momentum change and the impulse the tool's reaction reports over the run,
+/// and the largest momentum the plate had (world frame).
+fn books(run: &Run) -> (Vector, Vector, f32) {
+    let size = run.size;
+    let (mut world, mut set, soft) = free_plate((size, 16), run.k, run.mass, run.substeps);
     let tilt = Rotation::from_axis_angle(Vector::new(1.0, 0.0, 0.4).normalize(), run.tilt);
     let low = -run
         .shape
@@ -228,24 +239,7 @@ fn thrown(
     substeps: u32,
     spin: f32,
 ) -> (Vector, Vector, f64, (f64, f64), bool) {
-    let (size, cells) = (0.3f32, 12);
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    let fixed = world.insert_body(RigidBodyBuilder::fixed());
-    let surface = MassSpringSurfaceBuilder::from_mesh(&plate(size, size, cells, cells))
-        .stiffness(k)
-        .damping(0.02 * (k * plate_mass).sqrt() / cells as f32)
-        .mass(MassDistribution::Total(plate_mass))
-        .build()
-        .unwrap();
-    let mut set = SurfaceSet::new();
-    let options = AttachOptions {
-        substeps,
-        collider: true,
-    };
-    let soft = set.insert(surface, fixed, &mut world, options).unwrap();
+    let (mut world, mut set, soft) = free_plate((0.3, 12), k, plate_mass, substeps);
     let low = -shape.compute_local_aabb().mins.y;
     let body = world.insert_body(
         RigidBodyBuilder::dynamic()
