@@ -37,9 +37,10 @@ pub(super) struct Pressed {
     /// friction), filled in by [`record_impulses`].
     pub tangent_impulse: Vector,
     /// The momentum the hold gave the surface's vertices by its press (the velocity change,
-    /// booked in the substep it happened in), and by the press and the step after it
-    /// ([`MassSpringSurface::point_momentum`], filled in by [`record_impulses`]).
+    /// booked in the substep it happened in).
     pub pressed_momentum: Vector,
+    /// The momentum it gave by the press and the step after it
+    /// ([`MassSpringSurface::point_momentum`]), filled in by [`record_impulses`].
     pub momentum: Vector,
 }
 

@@ -309,7 +309,6 @@ pub struct MassSpringSurface {
     held_normal: Vec<DVec3>,
     /// Forces the holders add on held vertices (friction on a sliding hold), until released.
     held_forces: Vec<(u32, DVec3)>,
-    any_held: bool,
     /// The held vertices (`held` true), each once.
     held_list: Vec<u32>,
     /// Each held vertex's hold impulse over the last step ([`Self::hold_impulse`]); zero

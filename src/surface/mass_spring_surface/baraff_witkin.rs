@@ -154,7 +154,7 @@ impl MassSpringSurface {
 
     /// Removes the held directions of every free vertex's entry of `v`.
     fn project_held(&self, v: &mut [DVec3]) {
-        if self.any_held {
+        if !self.held_list.is_empty() {
             for (fi, &i) in self.free.iter().enumerate() {
                 v[fi] = self.unheld_part(i as usize, v[fi]);
             }

@@ -316,7 +316,6 @@ impl MassSpringSurfaceBuilder {
             held_list: Vec::new(),
             hold_impulse: vec![DVec3::ZERO; n],
             hold_impulse_at: Vec::new(),
-            any_held: false,
             point_holds: Vec::new(),
             holders: Vec::new(),
             pushing: ActiveMemory::default(),

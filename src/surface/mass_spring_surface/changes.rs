@@ -126,7 +126,6 @@ impl MassSpringSurface {
         }
         self.held[i as usize] = true;
         self.held_normal[i as usize] = DVec3::ZERO;
-        self.any_held = true;
         Ok(())
     }
 
@@ -200,7 +199,6 @@ impl MassSpringSurface {
             self.held[v as usize] = false;
         }
         self.held_list.clear();
-        self.any_held = false;
     }
     /// Is vertex `i` held?
     pub fn is_held(&self, i: u32) -> bool {

@@ -110,8 +110,7 @@ impl MassSpringSurface {
         // A holder takes what it holds of a held vertex's force: that part, over the step, is
         // the first part of the hold's impulse on it (the constraint solve adds the rest).
         // (`held_forces` are in the force already, along the tangent plane only.) Only the
-        // held vertices are visited (the whole surface was, a tenth of a 784-node plate's
-        // substep under six balls).
+        // held vertices are visited.
         for &i in &self.hold_impulse_at {
             self.hold_impulse[i as usize] = DVec3::ZERO;
         }
@@ -266,38 +265,23 @@ impl MassSpringSurface {
             return;
         };
         filter.apply(&self.rhs, &mut self.dv);
-        if self.free.len() == self.home.len()
-            && matches!(filter.kind(), FilterKind::Neighbour { .. })
-        {
-            // The truncated filter drifts the rigid mode: add the mean velocity change that
-            // makes the momentum change equal the applied impulse (module docs of `filter`).
-            let (mut impulse, mut got, mut total) = (DVec3::ZERO, DVec3::ZERO, 0.0);
-            for ((b, dv), &v) in self.rhs.iter().zip(&self.dv).zip(&self.free) {
-                let m = self.mass[v as usize];
-                impulse += *b;
-                got += *dv * m;
-                total += m;
-            }
-            let gamma = (impulse - got) / total;
-            self.dv.iter_mut().for_each(|dv| *dv += gamma);
+        // The truncated filter drifts the rigid mode of a free surface: the mean velocity
+        // change that makes the momentum change equal the applied impulse is added (module
+        // docs of `filter`), for the step's forces and again for the constraint solve's
+        // impulses, which reach the vertices through the same truncated columns.
+        let rigid = self.free.len() == self.home.len()
+            && matches!(filter.kind(), FilterKind::Neighbour { .. });
+        if rigid {
+            let impulse = self.rhs.iter().sum::<DVec3>();
+            add_rigid_mode(&mut self.dv, &self.free, &self.mass, impulse, DVec3::ZERO);
         }
         for h in &mut self.holders {
             h.impulse = DVec3::ZERO;
             h.angular_impulse = DVec3::ZERO;
         }
-        if self.any_held || !self.point_holds.is_empty() {
-            // The same correction for the constraint solve's impulses, which reach the
-            // vertices through the same truncated columns (a free surface only).
-            let rigid = self.free.len() == self.home.len()
-                && matches!(filter.kind(), FilterKind::Neighbour { .. });
-            let momentum = |dv: &[DVec3], free: &[u32], mass: &[f64]| {
-                dv.iter()
-                    .zip(free)
-                    .map(|(dv, &v)| *dv * mass[v as usize])
-                    .sum::<DVec3>()
-            };
+        if !self.held_list.is_empty() || !self.point_holds.is_empty() {
             let before = if rigid {
-                momentum(&self.dv, &self.free, &self.mass)
+                dv_momentum(&self.dv, &self.free, &self.mass)
             } else {
                 DVec3::ZERO
             };
@@ -313,12 +297,7 @@ impl MassSpringSurface {
                 &mut self.pushing,
             );
             if rigid {
-                let got = momentum(&self.dv, &self.free, &self.mass) - before;
-                let total: f64 = self.free.iter().map(|&v| self.mass[v as usize]).sum();
-                if total > 0.0 {
-                    let gamma = (applied - got) / total;
-                    self.dv.iter_mut().for_each(|dv| *dv += gamma);
-                }
+                add_rigid_mode(&mut self.dv, &self.free, &self.mass, applied, before);
             }
         }
         let mut probe = 0.0;
@@ -336,5 +315,23 @@ impl MassSpringSurface {
             motion_watch::note(&mut self.watch, i, self.pos[i]);
         }
         self.check_probe(probe);
+    }
+}
+
+/// `Σ m Δv` over the free vertices (`dv` by free slot).
+fn dv_momentum(dv: &[DVec3], free: &[u32], mass: &[f64]) -> DVec3 {
+    dv.iter()
+        .zip(free)
+        .map(|(dv, &v)| *dv * mass[v as usize])
+        .sum()
+}
+
+/// Adds to every free vertex's `dv` the mean velocity change that makes the momentum `dv`
+/// gained since it was `before` equal `impulse` (a rank-one correction of the rigid mode).
+fn add_rigid_mode(dv: &mut [DVec3], free: &[u32], mass: &[f64], impulse: DVec3, before: DVec3) {
+    let total: f64 = free.iter().map(|&v| mass[v as usize]).sum();
+    if total > 0.0 {
+        let gamma = (impulse - (dv_momentum(dv, free, mass) - before)) / total;
+        dv.iter_mut().for_each(|dv| *dv += gamma);
     }
 }
