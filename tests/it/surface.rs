@@ -339,6 +339,10 @@ fn holds_and_presses_report_the_momentum_they_give_a_free_surface() {
             .build()
             .unwrap();
         let n = s.num_vertices() as u32;
+        // Nothing held or pressed yet, and indices out of range: nothing to report.
+        assert_eq!(s.hold_impulse(0), Vector::ZERO);
+        assert_eq!(s.hold_impulse(u32::MAX), Vector::ZERO);
+        assert!(s.point_momentum(0).is_none() && s.point_momentum(usize::MAX).is_none());
         for step in 0..60u32 {
             s.release_all();
             // Three held vertices moving at velocities of their own, one of them with
