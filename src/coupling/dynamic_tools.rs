@@ -10,7 +10,10 @@
 //! its current velocity, the step's solve gives it the surface's impulses, and it moves on with
 //! the velocity they leave. The points it will meet in the next substep are pressed at its
 //! pose then: surface vertices it holds or will reach (speculative contacts: such a point may
-//! close its gap, not pass the body) and its own vertices and edges crossing the surface. At
+//! close its gap, not pass the body) and its own vertices and edges crossing the surface; where
+//! the body already overlaps the surface past its slop, the body is moved out, not the surface
+//! ([`push_out::push_out_bodies`]: pressing the surface out stores energy the body never
+//! paid for). At
 //! the end of the rigid step the body takes the pose and velocity the surfaces left it
 //! (several surfaces add what each changed). A body no surface touched keeps rapier's pose.
 
@@ -30,7 +33,9 @@ use rapier3d::geometry::ColliderHandle;
 use rapier3d::pipeline::PhysicsWorld;
 
 mod fed;
+mod push_out;
 pub(crate) use fed::Fed;
+pub(super) use push_out::push_out_bodies;
 
 /// A dynamic tool's rigid state while the surfaces step (world frame).
 #[derive(Copy, Clone, Debug)]

@@ -4,7 +4,7 @@
 //! ([`super::pressing`]), and each tool gets the reaction of what it holds and presses.
 
 use super::dynamic_tools::{
-    depths_now, move_on, press_dynamic, set_holders, within_slop, DynamicTool,
+    depths_now, move_on, press_dynamic, push_out_bodies, set_holders, within_slop, DynamicTool,
 };
 use super::friction::Friction;
 use super::pressing::{
@@ -350,6 +350,15 @@ pub(super) fn surface_substep(
             &mut owners,
         );
         within_slop(&mut s.contacts, &owners, dynamic);
+        let surface = &s.surface;
+        let on_pins = |c: &SurfaceContact| {
+            c.weights()
+                .iter()
+                .any(|&(v, w)| w > 0.0 && surface.is_pinned(v))
+        };
+        if push_out_bodies(&mut s.contacts, &owners, dynamic, body_pose, on_pins) {
+            set_holders(&mut s.surface, dynamic, &inv, h);
+        }
         let ids = press_all(
             &mut s.surface,
             &s.contacts,
