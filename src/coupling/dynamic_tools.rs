@@ -11,7 +11,8 @@
 //! the velocity they leave. The points it will meet in the next substep are pressed at its
 //! pose then: surface vertices it holds or will reach (speculative contacts: such a point may
 //! close its gap, not pass the body) and its own vertices and edges crossing the surface; where
-//! the body already overlaps the surface past its slop, the body is moved out, not the surface
+//! the body already overlaps the surface past its slop by more than its approach over the
+//! substep made, the body is moved out of that part, not the surface
 //! ([`push_out::push_out_bodies`]: pressing the surface out stores energy the body never
 //! paid for). At
 //! the end of the rigid step the body takes the pose and velocity the surfaces left it

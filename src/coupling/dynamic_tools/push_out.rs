@@ -1,4 +1,5 @@
-//! A dynamic tool found overlapping the surface past its slop is moved out, not the surface.
+//! A dynamic tool found overlapping the surface past its slop by more than its own approach
+//! made is moved out of that part, not the surface.
 
 use super::DynamicTool;
 use crate::coupling::pressing::PressOwner;
@@ -54,7 +55,7 @@ pub(crate) fn push_out_bodies(
                 let depth = if on_pins(c) {
                     c.depth.min(0.0)
                 } else {
-                    c.depth.min(c.depth - h * approach(i).max(0.0))
+                    c.depth - h * approach(i).max(0.0)
                 };
                 (i, depth)
             })
