@@ -350,41 +350,17 @@ pub(super) fn surface_substep(
             &mut owners,
         );
         within_slop(&mut s.contacts, &owners, dynamic);
-        // A dynamic tool overlapping the surface past what its approach made is moved out
-        // (`push_out_bodies`): each contact's approach, its tool point's normal speed toward
-        // the surface point.
-        if !dynamic.is_empty() {
-            let surface = &s.surface;
-            let approach: Vec<Real> = s
-                .contacts
-                .iter()
-                .enumerate()
-                .map(|(i, c)| {
-                    let point: Vector = c
-                        .weights()
-                        .iter()
-                        .map(|&(v, w)| surface.velocity(v) * w)
-                        .sum();
-                    let tool = velocities.get(i).copied().unwrap_or(Vector::ZERO);
-                    (tool - point).dot(c.normal)
-                })
-                .collect();
-            let on_pins = |c: &SurfaceContact| {
-                c.weights()
-                    .iter()
-                    .any(|&(v, w)| w > 0.0 && surface.is_pinned(v))
-            };
-            if push_out_bodies(
-                &mut s.contacts,
-                &owners,
-                dynamic,
-                body_pose,
-                on_pins,
-                |i| approach.get(i).copied().unwrap_or(0.0),
-                h,
-            ) {
-                set_holders(&mut s.surface, dynamic, &inv, h);
-            }
+        // A dynamic tool overlapping the surface past what its approach made is moved out.
+        if push_out_bodies(
+            &mut s.contacts,
+            &velocities,
+            &owners,
+            dynamic,
+            &s.surface,
+            body_pose,
+            h,
+        ) {
+            set_holders(&mut s.surface, dynamic, &inv, h);
         }
         let ids = press_all(
             &mut s.surface,

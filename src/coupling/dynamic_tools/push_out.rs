@@ -5,6 +5,7 @@ use super::DynamicTool;
 use crate::coupling::pressing::PressOwner;
 use crate::geometry::SurfaceContact;
 use crate::math::{Pose, Real, Rotation, Vector};
+use crate::surface::MassSpringSurface;
 
 /// Sweeps of the projected Gauss-Seidel solve below (its rows are one body's contacts, of rank
 /// six at most). Over the dynamic tests' 16,000 push-outs (CI's seed) half its answers left at
@@ -14,10 +15,10 @@ use crate::math::{Pose, Real, Rotation, Vector};
 const SWEEPS: usize = 30;
 
 /// Moves each dynamic tool (`dynamic`, by the contacts' `owners`' holder index) out of the
-/// part of its overlap with the surface that its own approach did not make (`contacts`,
-/// surface frame, the surface's body at `body_pose`; depths already less the tool's slop;
-/// `approach(i)`: contact `i`'s tool point's normal speed toward the surface point, so that
-/// `h` times it is what the last substep could have driven in): the least mass-weighted shift
+/// part of its overlap with `surface` that its own approach did not make (`contacts`, surface
+/// frame, the surface's body at `body_pose`; depths already less the tool's slop; a contact's
+/// approach is its tool point's velocity (`velocities`) less the surface point's, along its
+/// normal, and `h` times it is what the last substep could have driven in): the least mass-weighted shift
 /// of its pose (translation and turn about its centre of mass) that takes that part off (as
 /// far as [`SWEEPS`] sweeps get). The contacts' points move with it and their depths lose what
 /// the shift took off; what is left is pressed into the surface as before. Its velocities are
@@ -32,33 +33,38 @@ const SWEEPS: usize = 30;
 /// no velocity. Not for the overlap its approach made: moved out of that too, a 7.4 kg dumbbell
 /// resting on an 882 N/m plate at one substep sank 0.93 mm a substep at 5.6 cm/s and was
 /// lifted back each time, never at rest (and its weight's energy made each time). Nor out of a
-/// contact `on_pins` (on a triangle with a pinned vertex, which the surface holds in its
+/// contact on a triangle with a pinned vertex (which the surface holds in its
 /// step's solve without moving anything:
 /// [`crate::surface::MassSpringSurface::press_points`]), which only keeps the shift from taking
 /// the tool deeper into it: pushed out of a plate's pinned rim too, a box tipping over it was
 /// lifted a little every substep and gained up to 0.55 J in a 0.18 J scene.
 pub(crate) fn push_out_bodies(
     contacts: &mut [SurfaceContact],
+    velocities: &[Vector],
     owners: &[PressOwner],
     dynamic: &mut [DynamicTool],
+    surface: &MassSpringSurface,
     body_pose: &Pose,
-    on_pins: impl Fn(&SurfaceContact) -> bool,
-    approach: impl Fn(usize) -> Real,
     h: Real,
 ) -> bool {
+    // The depth contact `c` (`i`) asks the shift to take off.
+    let asked = |i: usize, c: &SurfaceContact| {
+        let weights = c.weights();
+        if weights
+            .iter()
+            .any(|&(v, w)| w > 0.0 && surface.is_pinned(v))
+        {
+            return c.depth.min(0.0);
+        }
+        let point: Vector = weights.iter().map(|&(v, w)| surface.velocity(v) * w).sum();
+        let tool = velocities.get(i).copied().unwrap_or(Vector::ZERO);
+        c.depth - h * (tool - point).dot(c.normal).max(0.0)
+    };
     let mut moved = false;
     for (j, d) in dynamic.iter_mut().enumerate() {
         let mine: Vec<(usize, Real)> = (0..contacts.len().min(owners.len()))
             .filter(|&i| owners[i].holder == Some(j))
-            .map(|i| {
-                let c = &contacts[i];
-                let depth = if on_pins(c) {
-                    c.depth.min(0.0)
-                } else {
-                    c.depth - h * approach(i).max(0.0)
-                };
-                (i, depth)
-            })
+            .map(|i| (i, asked(i, &contacts[i])))
             .collect();
         if !mine.iter().any(|&(_, depth)| depth > 0.0) {
             continue;
