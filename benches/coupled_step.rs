@@ -312,8 +312,8 @@ fn bench_search(c: &mut Criterion, label: &str, side: u32) {
     let slack = 0.25 * edge;
     let mut bvh = SurfaceBvh::new(&now, &triangles, slack);
     let mut reference = now.clone();
-    let (mut moved, mut verts, mut tris, mut contacts) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut moved, mut verts, mut tris, mut near_tris, mut contacts) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut bounds = Vec::new();
     let mut caches = vec![NearCache::default(); 6];
     let (mut candidates_seen, mut moved_seen, mut contacts_seen, mut samples) = (0, 0, 0, 0);
@@ -377,12 +377,8 @@ fn bench_search(c: &mut Criterion, label: &str, side: u32) {
                             // inside the grown box it walked, as the coupling does.
                             let q = query.merged(&box_);
                             let grow = 0.2 * q.extents().max_element();
-                            bvh.near_cached(&mut caches[k], &q, grow, &mut tris, &mut verts);
-                            tris.retain(|&t| {
-                                snapshot
-                                    .swept_bounds(t)
-                                    .is_some_and(|b| b.intersects(&query))
-                            });
+                            bvh.near_cached(&mut caches[k], &q, grow, &mut near_tris, &mut verts);
+                            snapshot.triangles_meeting(&near_tris, &query, &mut tris);
                         }
                         for &v in verts.iter().filter(|_| tests) {
                             let p = now[v as usize];

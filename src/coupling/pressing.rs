@@ -145,12 +145,7 @@ pub(super) fn find_contacts(
         triangles,
     };
     // Keep the triangles whose own bounds over the substep meet the tool's (`part_query`).
-    kept.clear();
-    kept.extend(candidates.iter().copied().filter(|&t| {
-        snapshot
-            .swept_bounds(t)
-            .is_some_and(|b| b.intersects(&query))
-    }));
+    snapshot.triangles_meeting(candidates, &query, kept);
     let candidates = &kept[..];
     if candidates.is_empty() {
         return;

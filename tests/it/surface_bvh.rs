@@ -84,6 +84,28 @@ proptest! {
                 let hits = snapshot.swept_bounds(t).unwrap().intersects(&query);
                 prop_assert!(!hits || tris.binary_search(&t).is_ok(), "cached: triangle {t} missed");
             }
+            // The coupling's filter of a tool's candidates (`triangles_meeting`, chunked and
+            // fetched ahead) against bounds computed here: the same triangles in the same
+            // order, an index out of range dropped.
+            let mut asked = tris.clone();
+            asked.insert(asked.len() / 2, u32::MAX);
+            let mut kept = Vec::new();
+            snapshot.triangles_meeting(&asked, &query, &mut kept);
+            let expected: Vec<u32> = tris
+                .iter()
+                .copied()
+                .filter(|&t| {
+                    let idx = surface.triangles()[t as usize];
+                    let (lo, hi) = idx
+                        .iter()
+                        .flat_map(|&v| [before[v as usize], now[v as usize]])
+                        .fold((Vector::splat(f32::MAX), Vector::splat(f32::MIN)), |(l, h), p| {
+                            (l.min(p), h.max(p))
+                        });
+                    lo.cmple(query.maxs).all() && hi.cmpge(query.mins).all()
+                })
+                .collect();
+            prop_assert_eq!(kept, expected);
             for (v, p) in now.iter().enumerate() {
                 let inside = query.contains_local_point(*p);
                 prop_assert!(
