@@ -287,7 +287,7 @@ fn bench_search_100k(c: &mut Criterion) {
 
 fn bench_search(c: &mut Criterion, label: &str, side: u32) {
     use rapier_touch::geometry::{
-        tool_surface_contacts, triangles_in, NearCache, SurfaceBvh, SurfaceSnapshot,
+        tool_surface_contacts_with_rings, triangles_in, NearCache, SurfaceBvh, SurfaceSnapshot,
     };
     use rapier_touch::parry3d::bounding_volume::BoundingVolume;
     use rapier_touch::parry3d::query::PointQuery;
@@ -388,9 +388,12 @@ fn bench_search(c: &mut Criterion, label: &str, side: u32) {
                             }
                         }
                         if tests {
-                            tool_surface_contacts(
+                            // With each vertex's ring from the BVH, as the coupling
+                            // asks for a kinematic tool.
+                            tool_surface_contacts_with_rings(
                                 &snapshot,
                                 &tris,
+                                &|v, out| bvh.triangles_of(&[v], out),
                                 &cube,
                                 from,
                                 to,
