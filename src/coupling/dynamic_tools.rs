@@ -191,13 +191,20 @@ impl DynamicTool {
 
     /// Moves the body on by `h` seconds at its velocity (about its centre of mass).
     pub fn advance(&mut self, h: Real) {
+        self.displace(self.linvel * h, self.angvel * h);
+    }
+
+    /// Moves the centre of mass by `shift` and turns the body about it by `turn` (a scaled
+    /// axis); `false`, with the pose unchanged, where the new pose is not finite.
+    pub fn displace(&mut self, shift: Vector, turn: Vector) -> bool {
         let com = self.pose.transform_point(self.local_com);
-        let turn = Rotation::from_scaled_axis(self.angvel * h);
+        let turn = Rotation::from_scaled_axis(turn);
         let rotation = (turn * self.pose.rotation).normalize();
-        let next = Pose::from_parts(com + self.linvel * h - rotation * self.local_com, rotation);
+        let next = Pose::from_parts(com + shift - rotation * self.local_com, rotation);
         if next.is_finite() {
             self.pose = next;
         }
+        next.is_finite()
     }
 
     /// The body as the surface's holder, in the surface's frame (`to_surface`: world to

@@ -100,15 +100,12 @@ pub(crate) fn push_out_bodies(
         }
         if !(shift.is_finite() && turn.is_finite())
             || (shift == Vector::ZERO && turn == Vector::ZERO)
+            || !d.displace(shift, turn)
         {
             continue;
         }
         let rotation = Rotation::from_scaled_axis(turn);
         let new_centre = centre + shift;
-        d.pose = Pose::from_parts(
-            new_centre - (rotation * d.pose.rotation).normalize() * d.local_com,
-            (rotation * d.pose.rotation).normalize(),
-        );
         d.touched = true;
         moved = true;
         let to_surface = body_pose.inverse();
