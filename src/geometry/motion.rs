@@ -2,7 +2,7 @@
 //! mapping walks back along.
 
 use super::contact::{ContactConfiguration, DirectionSource, TouchState};
-use super::reconstruction::Reconstructor;
+use super::reconstruction::{Reconstructor, Walk};
 use super::touch_mesh::TouchMesh;
 use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
@@ -297,8 +297,22 @@ impl Reconstructor {
         };
         if pen(self, 1.0) {
             // Already penetrating when the step began: not a first touch of this step.
+            if self.first_touch_only && pen(self, 0.0) {
+                return ContactConfiguration {
+                    state: TouchState::Penetrating,
+                    on_trajectory: false,
+                    ..separated
+                };
+            }
             let mut c = self
-                .translate_back(fixed, pos_fixed, moving, &now, &motion.start)
+                .translate_back_within(
+                    fixed,
+                    pos_fixed,
+                    moving,
+                    &now,
+                    &motion.start,
+                    Walk::first_touch_if(self.first_touch_only),
+                )
                 .unwrap_or(separated);
             c.on_trajectory = false;
             c.time_of_impact = None;

@@ -167,6 +167,9 @@ pub struct Reconstructor {
     /// The options used by every query.
     pub options: ReconstructionOptions,
     ws: Workspace,
+    /// Whether a motion whose first touch is not on the step is answered without its way out
+    /// ([`Reconstructor::set_first_touch_only`]).
+    pub(super) first_touch_only: bool,
 }
 
 impl std::fmt::Debug for Reconstructor {
@@ -207,6 +210,30 @@ impl Frame {
     }
 }
 
+/// How [`Reconstructor::translate_back_within`] walks back along the translation.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(super) enum Walk {
+    /// The paper's method: the first touch on the step, or else the way out of the overlap
+    /// along the whole backward ray.
+    Whole,
+    /// The first touch on the step only: a pose whose first touch is not on the step is
+    /// answered `Penetrating`, off the trajectory, with no reversing vector and no patches
+    /// ([`Reconstructor::set_first_touch_only`]). (Two convex meshes still get their way out:
+    /// their convex path finds it at no extra cost.)
+    FirstTouch,
+}
+
+impl Walk {
+    /// [`Walk::FirstTouch`] when `first_touch_only`, [`Walk::Whole`] otherwise.
+    pub(super) fn first_touch_if(first_touch_only: bool) -> Self {
+        if first_touch_only {
+            Walk::FirstTouch
+        } else {
+            Walk::Whole
+        }
+    }
+}
+
 fn dpose(p: &Pose) -> (DQuat, DVec3) {
     (p.rotation.as_dquat().normalize(), p.translation.as_dvec3())
 }
@@ -219,7 +246,19 @@ impl Reconstructor {
         Self {
             options,
             ws: Workspace::default(),
+            first_touch_only: false,
         }
+    }
+
+    /// With `on`, the reconstructor answers a motion whose first touch is not on the
+    /// step (its start pose already penetrates) `Penetrating`, off the trajectory, without
+    /// the way out along `-D` ([`ContactConfiguration::on_trajectory`]): no reversing vector,
+    /// no patches (two convex meshes still get it: [`Walk::FirstTouch`]). For a caller that
+    /// corrects such a pair otherwise (the step guard pushes it out along rapier's contact
+    /// normal): the way out walks the whole backward ray, across the 60 m TriMesh floor of
+    /// rapier's stress scene.
+    pub(crate) fn set_first_touch_only(&mut self, on: bool) {
+        self.first_touch_only = on;
     }
 
     /// Reconstructs the contact configuration of `moving` against `fixed`.
@@ -299,7 +338,14 @@ impl Reconstructor {
         let radius = bounding_radius(moving, motion.local_center);
         let angle = motion.dangle();
         if angle * radius <= tol {
-            return self.translate_back(fixed, pos_fixed, moving, &motion.end, &motion.start);
+            return self.translate_back_within(
+                fixed,
+                pos_fixed,
+                moving,
+                &motion.end,
+                &motion.start,
+                Walk::first_touch_if(self.first_touch_only),
+            );
         }
         Ok(self.rotate_back(fixed, pos_fixed, moving, motion, tol, radius, angle))
     }
@@ -386,8 +432,28 @@ impl Reconstructor {
         pos_moving: &Pose,
         prev_pos_moving: &Pose,
     ) -> Result<ContactConfiguration, ReconstructionError> {
+        self.translate_back_within(
+            fixed,
+            pos_fixed,
+            moving,
+            pos_moving,
+            prev_pos_moving,
+            Walk::Whole,
+        )
+    }
+
+    /// [`Self::translate_back`], walking as `walk` says.
+    pub(super) fn translate_back_within(
+        &mut self,
+        fixed: &TouchMesh,
+        pos_fixed: &Pose,
+        moving: &TouchMesh,
+        pos_moving: &Pose,
+        prev_pos_moving: &Pose,
+        walk: Walk,
+    ) -> Result<ContactConfiguration, ReconstructionError> {
         let mut c =
-            self.translate_back_inner(fixed, pos_fixed, moving, pos_moving, prev_pos_moving)?;
+            self.translate_back_inner(fixed, pos_fixed, moving, pos_moving, prev_pos_moving, walk)?;
         c.touch_pose = Pose::from_parts(
             pos_moving.translation + c.reversing_vector,
             pos_moving.rotation,
@@ -402,6 +468,7 @@ impl Reconstructor {
         moving: &TouchMesh,
         pos_moving: &Pose,
         prev_pos_moving: &Pose,
+        walk: Walk,
     ) -> Result<ContactConfiguration, ReconstructionError> {
         let (rf, tf) = dpose(pos_fixed);
         let (rm, tm) = dpose(pos_moving);
@@ -492,6 +559,9 @@ impl Reconstructor {
                 // The first touch is not on this step: go back to the nearest separating pose,
                 // the last touch on the whole backward ray.
                 result.on_trajectory = false;
+                if walk != Walk::Whole {
+                    return Ok(result);
+                }
                 s_star = if s_max < s_hi {
                     let s = self.collect_first_touch(fixed, moving, &fr, -tol, s_hi);
                     result.candidate_pairs = self.ws.pairs.len();
@@ -566,5 +636,74 @@ impl Reconstructor {
             .collect();
         result.patches = build_patches(fixed, moving, fr, selected, s_star, &to_world, rf);
         result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rotation;
+    use parry3d::shape::Cuboid;
+
+    /// With the first touch only, a motion that touched on the step is answered as before
+    /// (the analytic first touch), turning or not, and one whose start already penetrated is
+    /// `Penetrating` off the trajectory with no way out, where the full answer walks out. On
+    /// an open floor (two triangles): the general search, not the convex path.
+    #[test]
+    fn the_first_touch_only_answers_on_the_step_as_before_and_leaves_the_way_out() {
+        let floor = vec![
+            Vector::new(-2.0, 0.0, -2.0),
+            Vector::new(2.0, 0.0, -2.0),
+            Vector::new(2.0, 0.0, 2.0),
+            Vector::new(-2.0, 0.0, 2.0),
+        ];
+        let slab = TouchMesh::new(floor, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
+        assert!(!slab.is_convex());
+        let cube = TouchMesh::from_shape(&Cuboid::new(Vector::splat(0.5))).unwrap();
+        let slab_pose = Pose::IDENTITY;
+        let turn = Rotation::from_rotation_y(0.5);
+        let down = |from: Real, to: Real, turned: bool| {
+            let r = if turned { turn } else { Rotation::IDENTITY };
+            RigidMotion::new(
+                Pose::from_translation(Vector::new(0.0, from, 0.0)),
+                Pose::from_parts(Vector::new(0.0, to, 0.0), r),
+                Vector::ZERO,
+            )
+        };
+        for turned in [false, true] {
+            let mut rec = Reconstructor::default();
+            // From 0.8 m down to 0.3 m: the cube's bottom (0.5 m below its centre) met the
+            // slab's top (y = 0) 0.2 m back, a turn about the vertical changing none of it.
+            let on_step = down(0.8, 0.3, turned);
+            let full = rec
+                .reconstruct_motion(&slab, &slab_pose, &cube, &on_step)
+                .unwrap();
+            rec.set_first_touch_only(true);
+            let first = rec
+                .reconstruct_motion(&slab, &slab_pose, &cube, &on_step)
+                .unwrap();
+            for c in [&full, &first] {
+                assert_eq!(c.state, TouchState::Penetrating);
+                assert!(c.on_trajectory);
+                assert!((c.touch_pose.translation.y - 0.5).abs() < 1e-5, "{c:?}");
+            }
+            assert_eq!(full.reversing_vector, first.reversing_vector);
+            // From 0.4 m (already 0.1 m in) down to 0.3 m: not a first touch of this step.
+            let deep = down(0.4, 0.3, turned);
+            let first = rec
+                .reconstruct_motion(&slab, &slab_pose, &cube, &deep)
+                .unwrap();
+            rec.set_first_touch_only(false);
+            let full = rec
+                .reconstruct_motion(&slab, &slab_pose, &cube, &deep)
+                .unwrap();
+            assert_eq!(first.state, TouchState::Penetrating);
+            assert!(!first.on_trajectory && first.patches.is_empty());
+            assert_eq!(first.reversing_vector, Vector::ZERO);
+            assert_eq!(full.state, TouchState::Penetrating);
+            assert!(!full.on_trajectory);
+            // The way out along the motion: up 0.2 m to the slab's top.
+            assert!((full.reversing_vector.y - 0.2).abs() < 1e-4, "{full:?}");
+        }
     }
 }

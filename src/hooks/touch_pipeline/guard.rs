@@ -439,17 +439,24 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     SlowPair::Reconstruct => {}
                                 }
                             }
-                            let Some(config) = pair_configuration(
-                                &mut self.reconstructor,
-                                &self.hooks.meshes,
-                                &self.hooks.prev_poses,
-                                &world.bodies,
-                                &world.colliders,
-                                ph,
-                                Some(partner_pose),
-                                ch,
-                                Some(pose_now),
-                            ) else {
+                            // A pair whose first touch is not on the step is pushed out along
+                            // rapier's normal (below): its way out along the path is walked
+                            // only when there is none.
+                            let configuration = |rec: &mut Reconstructor, first_touch_only| {
+                                rec.set_first_touch_only(first_touch_only);
+                                pair_configuration(
+                                    rec,
+                                    &self.hooks.meshes,
+                                    &self.hooks.prev_poses,
+                                    &world.bodies,
+                                    &world.colliders,
+                                    ph,
+                                    Some(partner_pose),
+                                    ch,
+                                    Some(pose_now),
+                                )
+                            };
+                            let Some(config) = configuration(&mut self.reconstructor, true) else {
                                 continue;
                             };
                             // A pair that already overlapped when the step began has no first touch
@@ -489,6 +496,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 None
                             } else {
                                 rapier_normal(world, ph, ch).and_then(push_out)
+                            };
+                            let config = match along_normal {
+                                None if !config.on_trajectory && config.needs_correction() => {
+                                    let Some(c) = configuration(&mut self.reconstructor, false)
+                                    else {
+                                        continue;
+                                    };
+                                    c
+                                }
+                                _ => config,
                             };
                             (config, along_normal, blocked_at_start)
                         };
