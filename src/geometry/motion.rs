@@ -3,6 +3,10 @@
 
 use super::contact::{ContactConfiguration, DirectionSource, TouchState};
 use super::reconstruction::{Reconstructor, Walk};
+
+/// The cosine below which a sub-step's direction grazes a contact plane (about 75° off its
+/// normal): a touch found within the tolerance along it is looked at again.
+const GRAZING: Real = 0.25;
 use super::touch_mesh::TouchMesh;
 use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
@@ -407,9 +411,20 @@ impl Reconstructor {
         bisect(self, &mut tau_a, &mut tau_b, angle * radius);
         let (mut pa, mut pb) = (back(tau_a), back(tau_b));
         let mut sub = self
-            .translate_back(fixed, pos_fixed, moving, &pa, &pb)
+            .translate_back_within(fixed, pos_fixed, moving, &pa, &pb, Walk::SubStep)
             .unwrap_or(separated.clone());
-        if sub.needs_correction() && !sub.on_trajectory {
+        // A touch the sub-step put within the tolerance of its end ([`Walk::SubStep`]) along
+        // a direction that grazes its contact plane shows only the features nearest along it
+        // (a cube turning on a floor it rested on, walked back nearly along the floor, showed
+        // one of its four corners): such a touch is looked at as the paper's method would.
+        let grazing = || {
+            sub.reversing_vector.length() as f64 <= tol
+                && sub
+                    .patches
+                    .iter()
+                    .any(|p| p.normal.dot(sub.direction).abs() < GRAZING)
+        };
+        if sub.needs_correction() && (!sub.on_trajectory || grazing()) {
             // The sub-step's start already overlaps by a rounding of the predicate (its way
             // out would leave the path): bisect on, until the whole motion over the bracket is
             // below the tolerance, and try again.
