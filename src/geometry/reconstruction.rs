@@ -677,18 +677,17 @@ mod tests {
                 Vector::ZERO,
             )
         };
+        let mut rec = Reconstructor::default();
+        let mut answer = |motion: &RigidMotion, first_touch_only: bool| {
+            rec.set_first_touch_only(first_touch_only);
+            rec.reconstruct_motion(&slab, &slab_pose, &cube, motion)
+                .unwrap()
+        };
         for turned in [false, true] {
-            let mut rec = Reconstructor::default();
             // From 0.8 m down to 0.3 m: the cube's bottom (0.5 m below its centre) met the
             // slab's top (y = 0) 0.2 m back, a turn about the vertical changing none of it.
             let on_step = down(0.8, 0.3, turned);
-            let full = rec
-                .reconstruct_motion(&slab, &slab_pose, &cube, &on_step)
-                .unwrap();
-            rec.set_first_touch_only(true);
-            let first = rec
-                .reconstruct_motion(&slab, &slab_pose, &cube, &on_step)
-                .unwrap();
+            let (full, first) = (answer(&on_step, false), answer(&on_step, true));
             for c in [&full, &first] {
                 assert_eq!(c.state, TouchState::Penetrating);
                 assert!(c.on_trajectory);
@@ -697,13 +696,7 @@ mod tests {
             assert_eq!(full.reversing_vector, first.reversing_vector);
             // From 0.4 m (already 0.1 m in) down to 0.3 m: not a first touch of this step.
             let deep = down(0.4, 0.3, turned);
-            let first = rec
-                .reconstruct_motion(&slab, &slab_pose, &cube, &deep)
-                .unwrap();
-            rec.set_first_touch_only(false);
-            let full = rec
-                .reconstruct_motion(&slab, &slab_pose, &cube, &deep)
-                .unwrap();
+            let (full, first) = (answer(&deep, false), answer(&deep, true));
             assert_eq!(first.state, TouchState::Penetrating);
             assert!(!first.on_trajectory && first.patches.is_empty());
             assert_eq!(first.reversing_vector, Vector::ZERO);
