@@ -3,13 +3,13 @@
 
 use super::contact::{ContactConfiguration, DirectionSource, TouchState};
 use super::reconstruction::{Reconstructor, Walk};
+use super::touch_mesh::TouchMesh;
+use crate::math::{Pose, Real, Vector};
+use glamx::{DQuat, DVec3};
 
 /// The cosine below which a sub-step's direction grazes a contact plane (about 75° off its
 /// normal): a touch found within the tolerance along it is looked at again.
 const GRAZING: Real = 0.25;
-use super::touch_mesh::TouchMesh;
-use crate::math::{Pose, Real, Vector};
-use glamx::{DQuat, DVec3};
 
 /// The motion of a rigid object over one step, as rapier integrates a body: the object's
 /// centre of mass `local_center` (in the object's own frame) moves on a straight line from its
