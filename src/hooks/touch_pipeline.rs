@@ -123,7 +123,9 @@ pub struct TouchOptions {
     /// it: the pipeline remembers them, clears the flag, and raises it after a step only on
     /// the colliders whose body moved more than rapier's prediction distance during it (a
     /// slower body meets nothing rapier's speculative contacts did not see coming, and the
-    /// guard corrects poses anyway). rapier never recycles the contacts
+    /// guard corrects poses anyway), and only on those whose pairs the hooks can rewrite:
+    /// polyhedra that are not composite shapes (a ball's or a TriMesh's pairs are left as
+    /// rapier made them, so a flag there only costs). rapier never recycles the contacts
     /// of a pair with a hook flag (its narrow phase recomputes them every step), so a resting
     /// pile with the flag everywhere costs rapier itself about 1.7×. `false` in
     /// [`TouchPipeline::new`] (your hooks may need the flag on every manifold: a one-way

@@ -3,7 +3,8 @@
 //! never penetrate more than 1 mm after any step; a U-shaped TriMesh body rests on both legs
 //! over a bump; a resting stack stays still; removals, sleeping bodies and bodies without
 //! colliders do not break the hooks; degenerate bodies (massless, zero-size, NaN or infinite
-//! velocity) and `dt = 0` neither panic nor put a NaN pose into rapier.
+//! velocity) and `dt = 0` neither panic nor put a NaN pose into rapier; hook flags managed on
+//! demand go only to the fast bodies whose pairs the hooks can rewrite.
 
 use rapier_touch::prelude::*;
 use rapier_touch::rapier3d::prelude::*;
@@ -535,5 +536,82 @@ fn prepared_meshes_refuse_bad_shapes_and_serve_the_step() {
         .unwrap()
         .map_or(0.0, |c| -c.dist);
         assert!(depth <= 1e-3, "the cube {depth} m into the prepared hull");
+    }
+}
+
+/// With the hook flags managed on demand (`TouchPipeline::default()`), a fast body whose pairs
+/// the hooks can rewrite (a box) keeps its flag while it moves; a ball (curved: its touch mesh
+/// is a tessellation) and a TriMesh body (a composite shape, one manifold per triangle) lose
+/// theirs, as the hooks never rewrite their pairs. All three still land on the floor without
+/// going in deeper than 1 mm (parry's contact query), and once at rest none has a flag.
+#[test]
+fn hook_flags_on_demand_go_only_where_the_hooks_can_rewrite() {
+    let mut w = world();
+    add_floor(&mut w);
+    let (v, i) = parry3d::shape::Cuboid::new(Vector::splat(0.2)).to_trimesh();
+    let shapes = [
+        ColliderBuilder::cuboid(0.2, 0.2, 0.2),
+        ColliderBuilder::ball(0.2),
+        ColliderBuilder::trimesh(v, i).unwrap(),
+    ];
+    let bodies: Vec<(RigidBodyHandle, ColliderHandle)> = shapes
+        .into_iter()
+        .enumerate()
+        .map(|(k, co)| {
+            let b = w.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(k as f32 * 1.5 - 1.5, 1.0, 0.0))
+                    .linvel(Vector::new(0.0, -12.0, 0.0)),
+            );
+            let c = w.insert_collider(co.density(1000.0).active_hooks(HOOKS), Some(b));
+            (b, c)
+        })
+        .collect();
+    let mut touch = TouchPipeline::default();
+    let flagged =
+        |w: &PhysicsWorld, c: ColliderHandle| w.colliders[c].active_hooks().contains(HOOKS);
+    touch.step(&mut w);
+    // 12 m/s for 1/60 s: 20 cm, far past rapier's prediction distance.
+    assert!(
+        flagged(&w, bodies[0].1),
+        "the box lost its flag while falling fast"
+    );
+    assert!(
+        !flagged(&w, bodies[1].1),
+        "the ball kept a flag the hooks never use"
+    );
+    assert!(
+        !flagged(&w, bodies[2].1),
+        "the TriMesh body kept a flag the hooks never use"
+    );
+    let floor = w
+        .colliders
+        .iter()
+        .find(|(_, c)| c.parent().is_none())
+        .map(|(h, _)| h)
+        .unwrap();
+    for _ in 0..240 {
+        touch.step(&mut w);
+        for &(_, c) in &bodies {
+            let depth = parry3d::query::contact(
+                w.colliders[floor].position(),
+                w.colliders[floor].shape(),
+                w.colliders[c].position(),
+                w.colliders[c].shape(),
+                0.0,
+            )
+            .unwrap()
+            .map_or(0.0, |k| -k.dist);
+            assert!(
+                depth <= 1e-3,
+                "{:?} {depth} m into the floor",
+                w.colliders[c].shape().shape_type()
+            );
+        }
+    }
+    for &(b, c) in &bodies {
+        assert!(w.bodies[b].translation().y > 0.0, "went through the floor");
+        assert!(w.bodies[b].linvel().length() < 0.05, "not at rest");
+        assert!(!flagged(&w, c), "a flag left on a body at rest");
     }
 }
