@@ -43,6 +43,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
         let mut reported: HashSet<(ColliderHandle, ColliderHandle)> = HashSet::default();
         let mut moved_bodies: Vec<RigidBodyHandle> = Vec::new();
         let mut moved_before = 0;
+        // The bodies the guard may have left in deep contact (`sync_hook_flags`).
+        let mut unsettled: HashSet<RigidBodyHandle> = HashSet::default();
         let mut still: Option<StillPartners> = None;
         let rewind = self.options.rewind_dynamic_impacts;
         for pass in 0..passes {
@@ -661,8 +663,12 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             if !moved {
                 break;
             }
+            if pass + 1 == passes {
+                // Moved by the last pass, with none left to look at them again.
+                unsettled.extend(moved_bodies[moved_before..].iter().copied());
+            }
         }
         sync_moved_colliders(world, &mut moved_bodies);
-        self.sync_hook_flags(world);
+        self.sync_hook_flags(world, &unsettled);
     }
 }
