@@ -526,15 +526,7 @@ fn prepared_meshes_refuse_bad_shapes_and_serve_the_step() {
         for (_, b) in w.bodies.iter() {
             assert!(b.position().is_finite() && b.linvel().is_finite());
         }
-        let depth = parry3d::query::contact(
-            w.colliders[hull].position(),
-            w.colliders[hull].shape(),
-            w.colliders[cube].position(),
-            w.colliders[cube].shape(),
-            0.0,
-        )
-        .unwrap()
-        .map_or(0.0, |c| -c.dist);
+        let depth = parry_depth(&w, hull, cube);
         assert!(depth <= 1e-3, "the cube {depth} m into the prepared hull");
     }
 }
@@ -564,6 +556,19 @@ fn hooked_drop() -> (PhysicsWorld, Vec<(RigidBodyHandle, ColliderHandle)>) {
         })
         .collect();
     (w, bodies)
+}
+
+/// How deep collider `b` is in collider `a` by parry's contact query (0 when apart).
+fn parry_depth(w: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle) -> f32 {
+    parry3d::query::contact(
+        w.colliders[a].position(),
+        w.colliders[a].shape(),
+        w.colliders[b].position(),
+        w.colliders[b].shape(),
+        0.0,
+    )
+    .unwrap()
+    .map_or(0.0, |c| -c.dist)
 }
 
 fn flagged(w: &PhysicsWorld, c: ColliderHandle) -> bool {
@@ -645,15 +650,7 @@ fn hooked_bodies_land_within_a_millimetre_and_rest_without_flags() {
     for _ in 0..240 {
         touch.step(&mut w);
         for &(_, c) in &bodies {
-            let depth = parry3d::query::contact(
-                w.colliders[floor].position(),
-                w.colliders[floor].shape(),
-                w.colliders[c].position(),
-                w.colliders[c].shape(),
-                0.0,
-            )
-            .unwrap()
-            .map_or(0.0, |k| -k.dist);
+            let depth = parry_depth(&w, floor, c);
             assert!(
                 depth <= 1e-3,
                 "{:?} {depth} m into the floor",
