@@ -43,8 +43,9 @@
 //! This file holds the entry points and the walk back; `reconstruction/primitives.rs` the
 //! feature tests (eq. 1-3 as a ray against a triangle, the edge-edge solve, the pose tests),
 //! `reconstruction/events.rs` their application to the triangle pairs the BVHs cannot rule
-//! out, `reconstruction/convex.rs` the GJK path for two convex meshes, `reconstruction/walk.rs` how far
-//! a walk back goes (the whole backward ray, or only the step).
+//! out, `reconstruction/convex.rs` the GJK path for two convex meshes,
+//! `reconstruction/walk.rs` how far a walk back goes (the whole backward ray, or only the
+//! step).
 
 use super::classify::{build_patches, Event};
 use super::contact::{ContactConfiguration, DirectionSource, TouchState};
