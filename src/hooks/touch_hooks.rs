@@ -302,6 +302,19 @@ impl<H: PhysicsHooks> TouchHooks<H> {
         *self.skipped.get_mut() = 0;
     }
 
+    /// Whether the hooks can rewrite the pairs of collider `c`: its touch mesh is its shape
+    /// (a polyhedron, not the tessellation of a curved shape: rapier's contacts on a ball, a
+    /// capsule or a rounded shape are exact) and the shape is not composite (a triangle mesh,
+    /// a height field or a compound gets one manifold per part from rapier, and one
+    /// first-touch patch cannot stand for all of them: rewriting them put bodies through a
+    /// bumpy TriMesh floor in rapier's `trimesh3` stress scene).
+    pub(crate) fn rewritable(&self, colliders: &ColliderSet, c: ColliderHandle) -> bool {
+        self.meshes.get(&c).is_some_and(|m| m.exact)
+            && colliders
+                .get(c)
+                .is_some_and(|co| co.shape().as_composite_shape().is_none())
+    }
+
     fn reconstruct_pair(
         &self,
         bodies: &RigidBodySet,
@@ -422,25 +435,10 @@ impl<H: PhysicsHooks> PhysicsHooks for TouchHooks<H> {
             depth <= self.slop + travel
                 && !(dynamic(c1) && dynamic(c2) && travel < safe(c1).min(safe(c2)))
         };
-        // rapier's contacts on a curved shape (a ball, a capsule, a rounded shape) are exact
-        // where its touch mesh is a tessellation: only pairs of polyhedra are rewritten.
         let exact = |c| self.meshes.get(&c).map(|m| m.exact);
-        // A composite shape (a triangle mesh, a height field, a compound) gets one manifold per
-        // part from rapier: one first-touch patch cannot stand for all of them (rewriting them
-        // put bodies through a bumpy TriMesh floor in rapier's `trimesh3` stress scene).
-        let single = |c| {
-            context
-                .colliders
-                .get(c)
-                .is_some_and(|co: &rapier3d::geometry::Collider| {
-                    co.shape().as_composite_shape().is_none()
-                })
-        };
         let config = if deep
-            && exact(c1) == Some(true)
-            && exact(c2) == Some(true)
-            && single(c1)
-            && single(c2)
+            && self.rewritable(context.colliders, c1)
+            && self.rewritable(context.colliders, c2)
         {
             self.reconstruct_pair(context.bodies, context.colliders, c1, c2)
         } else {

@@ -458,7 +458,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // read them, is reconstructed: parry's contact query is not asked
                             // (it answered wrongly for a 4 m plate lying on a 100 m floor).
                             if !self.options.report_touching && !may_tunnel && rapier.is_none() {
-                                let reach = self.hooks.meshes.get(&ch).map_or(0.0, |m| m.reach);
                                 let measured = measure_slow_pair(
                                     world,
                                     (&self.hooks.prev_poses, &self.hooks.inner),

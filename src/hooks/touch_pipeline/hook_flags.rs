@@ -36,19 +36,16 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             let Some(co) = world.colliders.get(*h) else {
                 continue;
             };
-            // The hooks rewrite only pairs of two polyhedra that are not composite shapes
-            // (`TouchHooks::modify_solver_contacts`): a curved shape (a ball, whose touch mesh
-            // is a tessellation) or a TriMesh, a height field or a compound gets no flag, and
-            // rapier does not recompute its pairs every step for nothing (hook side of the
-            // stress scenes: rounded hulls 1.47-1.49× -> 1.38-1.40× vanilla, ragdolls 1.17× ->
-            // 1.10-1.12×, TriMesh floor 1.64× -> 1.59-1.60×).
-            let rewritable = self.hooks.meshes.get(h).is_some_and(|m| m.exact)
-                && co.shape().as_composite_shape().is_none();
-            let moved = rewritable
-                && co
-                    .parent()
-                    .is_some_and(|bh| !self.options.correct_poses || unsettled.contains(&bh))
+            // A collider whose pairs the hooks never rewrite (`TouchHooks::rewritable`: a ball,
+            // a rounded shape, a TriMesh, a compound) gets no flag, and rapier does not
+            // recompute its pairs every step for nothing (hook side of the stress scenes:
+            // rounded hulls 1.47-1.49× -> 1.38-1.40× vanilla, ragdolls 1.17× -> 1.10-1.12×,
+            // TriMesh floor 1.64× -> 1.59-1.60×).
+            let moved = self.hooks.rewritable(&world.colliders, *h)
                 && co.parent().is_some_and(|bh| {
+                    if self.options.correct_poses && !unsettled.contains(&bh) {
+                        return false;
+                    }
                     match (world.bodies.get(bh), self.hooks.prev_poses.get(&bh)) {
                         // A body that did not move (a sleeping pile's) is not measured.
                         (Some(b), Some(prev)) if b.position() != prev => {
