@@ -355,14 +355,17 @@ fn sphere_gap(
     reach: Real,
 ) -> Real {
     let shape = partner.shape();
-    // (parry's own inside, where it has one: a TriMesh with pseudo-normals has one, open or
-    // not, and its queries find a body under such a floor overlapping it.)
-    if (shape.as_support_map().is_none() && partner_mesh.is_closed())
-        || shape.contains_point(partner_pose, center)
-    {
+    if shape.as_support_map().is_none() && partner_mesh.is_closed() {
         return 0.0;
     }
-    let gap = shape.distance_to_point(partner_pose, center, true) - reach;
+    // One projection onto the partner as a solid says both: parry's own inside, where it has
+    // one (a TriMesh with pseudo-normals has one, open or not, and its queries find a body
+    // under such a floor overlapping it), and the distance outside.
+    let projection = shape.project_point(partner_pose, center, true);
+    if projection.is_inside {
+        return 0.0;
+    }
+    let gap = projection.point.distance(center) - reach;
     if gap.is_finite() {
         gap
     } else {
