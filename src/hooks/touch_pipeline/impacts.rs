@@ -429,7 +429,7 @@ mod tests {
             ball in any::<bool>(),
             x in -8.0f32..8.0, y in -3.0f32..6.0, z in -8.0f32..8.0,
             ax in -1.0f32..1.0, ay in -1.0f32..1.0, az in -1.0f32..1.0, angle in 0.0f32..3.0,
-            k in prop::sample::select(vec![1e-3f32, 1.0, 1e3]),
+            k in prop::sample::select(vec![1e-4f32, 1e-3, 1.0, 1e3, 1e4]),
         ) {
             let (partner, partner_mesh) = partner(which, k);
             // The mover: a ball of radius 0.3 or a box of half-extents `half`, its points
