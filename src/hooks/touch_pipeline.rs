@@ -22,6 +22,7 @@ use rapier3d::geometry::{ColliderHandle, ColliderSet};
 use rapier3d::pipeline::{ActiveHooks, EventHandler, PhysicsHooks, PhysicsWorld, QueryFilter};
 use std::sync::Arc;
 
+mod articulations;
 mod correction;
 mod guard;
 mod hook_flags;
@@ -214,7 +215,12 @@ struct Tool {
 ///    `modify_solver_contacts` removes (a one-way platform: the guard asks it on the first-touch
 ///    contact before correcting), exactly as in vanilla rapier (tools ignore the collision
 ///    types only). The colliders of moved bodies and their broad-phase boxes are synced at
-///    once, so collider poses and the query pipeline see the corrected poses after the step;
+///    once, so collider poses and the query pipeline see the corrected poses after the step.
+///    Articulated bodies are rapier's where its joint solver holds them: a body held by
+///    impulse joints is corrected only where it may have passed through its partner, never
+///    against a body of its own articulation; a multibody's links are never moved (rapier
+///    computes their poses from the multibody's joint coordinates), so they are guarded by
+///    rapier alone (its CCD), a limitation;
 /// 4. **tools:** a kinematic body registered with [`TouchPipeline::set_tool_target`] is put at
 ///    the last pose that does not penetrate (its proxy), and
 ///    [`TouchPipeline::tool_feedback`] gives the device-to-proxy offset for a feedback force;

@@ -1,5 +1,6 @@
 //! One integration-test binary (links once): a module per layer and claim.
 
+mod articulations;
 mod auto_tools;
 mod circling_tools;
 mod classic_loop;

@@ -68,7 +68,10 @@ pub(super) fn apply_correction(
     // rests on a fixed or kinematic collider: its share would push it into what supports it
     // (seen: a thin dynamic plate pushed 2.25 mm into the floor under it). The moving body then
     // takes it all, walked back along its own path as in the paper.
+    // (Nor is a multibody's link moved: rapier computes its pose from the multibody's joint
+    // coordinates, `movers`.)
     let partner_mass = partner_body
+        .filter(|pb| world.multibody_joints.rigid_body_link(*pb).is_none())
         .and_then(|pb| world.bodies.get(pb))
         .filter(|b| b.is_dynamic())
         .filter(|_| !supported(world, ph))
