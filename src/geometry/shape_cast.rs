@@ -105,28 +105,17 @@ impl Reconstructor {
         let drift = ((c1 - c0).as_vec3(), (motion.dangle() * turning) as Real);
         // The walk along the path asks a huge box only for its part near the path (the same
         // first touch: see `near_part`), the contacts below the whole box.
+        let places = [motion.start.translation, motion.end.translation];
         let near = near_part(
             fixed,
             pos_fixed,
             (c0.as_vec3(), c1.as_vec3()),
             reach as Real,
         );
-        let near_query;
-        let walk = match &near {
-            Some((part, part_pose)) => {
-                let mut w = PairQuery::new(
-                    part,
-                    part_pose,
-                    moving,
-                    self.options.tolerance,
-                    [motion.start.translation, motion.end.translation],
-                );
-                (w.tol, w.touch) = (q.tol, q.touch);
-                near_query = w;
-                &near_query
-            }
-            None => &q,
-        };
+        let near_query = near
+            .as_ref()
+            .map(|part| q.cut_to(part, moving, self.options.tolerance, places));
+        let walk = near_query.as_ref().unwrap_or(&q);
         let end = motion.end;
         let d = end.translation - motion.start.translation;
         let (direction, direction_source) = match d.try_normalize() {
@@ -213,12 +202,12 @@ impl Reconstructor {
 ///
 /// Along the path every point of the moving shape stays within `reach` of the centre's
 /// segment, so the cut's own faces stay at least twice the reach away from it, farther than
-/// the touch tolerance: the path first touches the cut part where and when it first touches the box, and
-/// the distances the walk reads below the reach are the box's own. GJK in `f32` is no match for
-/// a box hundreds of times the shape's size: a ball of 1 m, a capsule, a cylinder rolling 3-4 mm
-/// over a 200 m box were answered overlapping at one pose in three (rapier's CCD stress
-/// scene), and the reconstruction took them through the box, walking them back 0.2-1.1 of
-/// their size.
+/// the touch tolerance: the path first touches the cut part where and when it first touches
+/// the box, and the distances the walk reads below the reach are the box's own. GJK in `f32`
+/// is no match for a box hundreds of times the shape's size: balls, capsules and cylinders
+/// rolling a few millimetres over a 200 m box were answered overlapping at some poses
+/// (rapier's CCD stress scene), and the reconstruction took them through the box, walking
+/// them back 0.2-1.1 of their size.
 fn near_part(
     fixed: &dyn Shape,
     pos_fixed: &Pose,
@@ -356,7 +345,7 @@ impl<'a> PairQuery<'a> {
         };
         // A ball and a convex shape: GJK on the support maps is no match for parry's exact
         // projection of the ball's centre. A ball of 1 m rolling 3-4 mm over a 200 m box
-        // (rapier's CCD stress scene) was answered overlapping by GJK at one pose in three,
+        // (rapier's CCD stress scene) was answered overlapping by GJK at some poses,
         // taken through the box and walked back 0.2-0.9 m.
         let ball = (fixed.as_ball().is_some() && moving.is_convex())
             || (moving.as_ball().is_some() && fixed.is_convex());
@@ -380,6 +369,20 @@ impl<'a> PairQuery<'a> {
             tol,
             touch: TOUCH * tol,
         }
+    }
+
+    /// The same query on `part` of the fixed shape ([`near_part`]), with this one's
+    /// tolerances.
+    fn cut_to<'b>(
+        &self,
+        part: &'b (Cuboid, Pose),
+        moving: &'b dyn Shape,
+        tolerance: Real,
+        places: [Vector; 2],
+    ) -> PairQuery<'b> {
+        let mut q = PairQuery::new(&part.0, &part.1, moving, tolerance, places);
+        (q.tol, q.touch) = (self.tol, self.touch);
+        q
     }
 
     /// The two border radii together (world units).

@@ -236,9 +236,9 @@ proptest! {
     /// corrected and it is never taken through the box, by the shape method or, where that
     /// gives up, the mesh method (as `TouchPipeline` asks them). Checked against the plane's
     /// distance, written here. GJK on the two support maps answered such shapes (a 1 m ball
-    /// 3-4 mm over a 200 m box, rapier's CCD stress scene) overlapping at one pose in three,
-    /// and the reconstruction took them through the box, walking them back up to 1.1 of their
-    /// size (about one case in twenty for the cylinders and capsules of this test).
+    /// 3-4 mm over a 200 m box, rapier's CCD stress scene) overlapping at some poses, and the
+    /// reconstruction took them through the box, walking them back up to 1.1 of their size
+    /// (1-9 % of the cases for the cylinders and capsules of this test).
     #[test]
     fn a_curved_shape_sliding_just_over_a_huge_box_is_never_taken_through_it(
         kind in 0u8..6,
