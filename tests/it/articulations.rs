@@ -190,6 +190,18 @@ fn drawn(
     )
 }
 
+/// The chains the properties draw ([`drawn`]'s arguments): 2 to 5 links, scale 1e-4 to 1e4 m,
+/// half-size 0.1 to 10 times a tenth of the scale, 1 to 120 sizes a second, turned at random.
+fn chains() -> impl Strategy<Value = (usize, f32, f32, f32, Rotation)> {
+    (
+        2usize..6,
+        -4.0f32..4.0,
+        -1.0f32..1.0,
+        0.0f32..2.08,
+        crate::common::strategies::rotation(),
+    )
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
@@ -201,11 +213,7 @@ proptest! {
     /// links of 1.6 m dropped at 2.3 m/s), within 1 % of its start.
     #[test]
     fn a_jointed_chain_shot_at_a_thin_plate_never_goes_through(
-        links in 2usize..6,
-        log_s in -4.0f32..4.0,
-        log_h in -1.0f32..1.0,
-        log_speed in 0.0f32..2.08,
-        rotation in crate::common::strategies::rotation(),
+        (links, log_s, log_h, log_speed, rotation) in chains(),
         hook_flags in any::<bool>(),
     ) {
         let (sizes, start) = drawn(links, log_s, log_h, log_speed, rotation);
@@ -234,11 +242,7 @@ proptest! {
     /// after three steps), vanilla rapier alone.
     #[test]
     fn a_multibody_chain_is_left_to_rapier(
-        links in 2usize..6,
-        log_s in -4.0f32..4.0,
-        log_h in -1.0f32..1.0,
-        log_speed in 0.0f32..2.08,
-        rotation in crate::common::strategies::rotation(),
+        (links, log_s, log_h, log_speed, rotation) in chains(),
     ) {
         let (sizes, start) = drawn(links, log_s, log_h, log_speed, rotation);
         let (mut vanilla, links_v, _) = chain(sizes, start, true);
