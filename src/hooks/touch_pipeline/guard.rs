@@ -6,7 +6,7 @@ use super::articulations::{articulated, same_articulation};
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
-    apart_when_lifted, parry_depth, push_out, safe_step, within_along, Mover, PairStates, PairView,
+    push_out, resting_within, safe_step, slow_pair_calm, Mover, PairStates, PairView,
 };
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting_slop};
@@ -371,29 +371,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // slop of that is not made.
                         let resting_target = resting.map(|r| r.depth_at_start.max(resting_slop));
                         let push_tolerance = 0.1 * slop;
+                        // A resting pair no deeper than its push would leave it is rapier's
+                        // (`resting_within`).
                         if let (Some(r), Some(target)) = (&resting, resting_target) {
-                            // No deeper, by rapier's points and what a turn may have added,
-                            // than that push would leave it: rapier's, before the push
-                            // measures it (the pyramid asked for 0.65 such measures a step,
-                            // 30 µs each, two in three leaving the pair as it was).
-                            if r.depth + corner_reach <= target + push_tolerance {
-                                continue;
-                            }
-                            // Only a corner rapier held no point for may be deeper (the pair
-                            // turned): lifted along rapier's normal by what the push would
-                            // leave, a pair parry finds apart needs no push (an intersection
-                            // test, a tenth of the push out below; a TriMesh has no support
-                            // points for `corner_reach`'s own bound). (Lifted by the resting
-                            // slop only, about a third of the TriMesh-floor stress scene's
-                            // pushes found their pair within what they would leave: 236 pushes
-                            // in 300 steps on its hook side, 189 with this lift.)
-                            if r.depth <= target + push_tolerance
-                                && apart_when_lifted(
-                                    (partner, &partner_pose),
-                                    (co, &pose_now),
-                                    r.normal * (target + push_tolerance),
-                                )
-                            {
+                            if resting_within(
+                                (r, corner_reach),
+                                target + push_tolerance,
+                                (partner, &partner_pose),
+                                (co, &pose_now),
+                            ) {
                                 continue;
                             }
                         }
@@ -412,70 +398,19 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             };
                             (c.clone(), Some(c), false)
                         } else {
-                            if !self.options.report_touching && !may_tunnel {
-                                // A slow pair: rapier's own contact points, re-read at the poses
-                                // now, say how deep it is; with no points rapier found it apart
-                                // (beyond its prediction distance) when the step began, so it can
-                                // be no deeper than the pair's relative travel.
-                                let bound = match rapier {
-                                    Some(r) if trusted => r.depth + corner_reach,
-                                    _ => travel,
-                                };
-                                if bound <= slop {
-                                    continue;
-                                }
-                                // Points rapier had but that moved too far to be read (a body
-                                // sliding faster than the prediction distance per step): moved
-                                // out along rapier's normal by the slop, a pair GJK finds apart
-                                // overlaps by no more than the slop (a sliding cube on a TriMesh
-                                // floor was otherwise reconstructed every step). A pair already
-                                // in contact when the step began is only ever pushed back to the
-                                // resting slop along that normal (below), so it is lifted by
-                                // that: rapier's own resting overlap (up to a millimetre) is
-                                // deeper than the slop, and 677 of the TriMesh stress scene's
-                                // 911 reconstructions were such pairs, none corrected.
-                                // So are trusted points a turn may have brought another
-                                // corner past (`corner_reach`).
-                                if let Some(r) = rapier.filter(|_| !trusted || corner_reach > 0.0) {
-                                    let lift = if overlapped {
-                                        resting_slop.max(slop)
-                                    } else {
-                                        slop
-                                    };
-                                    // One axis first (rapier's normal): two support
-                                    // points.
-                                    if within_along(
-                                        (partner, &partner_pose),
-                                        (co, &pose_now),
-                                        r.normal,
-                                        lift,
-                                    ) {
-                                        continue;
-                                    }
-                                    // A curved pair (a rolling rounded hull, whose re-read
-                                    // normal can be off): parry's exact query, the one its
-                                    // reconstruction walks on, says how deep it is; within the
-                                    // lift it is left to rapier, as the pairs rapier has no
-                                    // points for are below (7,000 of the hull scene's 10,000
-                                    // reconstructions were such pairs already in contact,
-                                    // almost none corrected). Asked before the lifted test
-                                    // below, which only one in five of that scene's pairs
-                                    // passed (either one lets a pair go: the order only
-                                    // saves queries).
-                                    if curved
-                                        && parry_depth((partner, &partner_pose), (co, &pose_now))
-                                            .is_some_and(|d| d <= lift)
-                                    {
-                                        continue;
-                                    }
-                                    if apart_when_lifted(
-                                        (partner, &partner_pose),
-                                        (co, &pose_now),
-                                        r.normal * lift,
-                                    ) {
-                                        continue;
-                                    }
-                                }
+                            // A slow pair that rapier's own points, or the shapes lifted along
+                            // rapier's normal, show within the slop (`slow_pair_calm`).
+                            if !self.options.report_touching
+                                && !may_tunnel
+                                && slow_pair_calm(
+                                    (rapier, trusted, corner_reach),
+                                    (travel, overlapped, curved),
+                                    (resting_slop, slop),
+                                    (partner, &partner_pose),
+                                    (co, &pose_now),
+                                )
+                            {
+                                continue;
                             }
                             // A pair rapier has contact points for, but that moved too far to
                             // read them, is reconstructed: parry's contact query is not asked

@@ -1,5 +1,6 @@
 //! One pair as the step guard reads it ([`PairView`]), what it remembers of a pair between
-//! steps ([`PairState`]), and the way out of an overlap ([`push_out`]).
+//! steps ([`PairState`]), the checks that leave a slow or a resting pair to rapier
+//! ([`slow_pair_calm`], [`resting_within`]), and the way out of an overlap ([`push_out`]).
 
 use super::rapier_contacts::{collider_pose_now, rapier_contact_of, RapierContact};
 use super::*;
@@ -266,6 +267,88 @@ pub(super) fn safe_step(mesh: &TouchMesh, partner_mesh: &TouchMesh) -> Real {
         (a, b) if b > 0.0 => a.min(b),
         (a, _) => a,
     }
+}
+
+/// Whether a resting pair (rapier's contact `r`, re-read at the poses now, and `corner_reach`
+/// how far a turn may have brought another corner past its points) is no deeper than `keep`,
+/// the depth its push back would leave it at (and the push's tolerance): rapier's, before the
+/// push measures it.
+///
+/// No deeper by rapier's points and what a turn may have added: the pyramid asked for 0.65
+/// such measures a step, 30 µs each, two in three leaving the pair as it was. Otherwise only
+/// a corner rapier held no point for may be deeper (the pair turned): lifted along rapier's
+/// normal by `keep`, a pair parry finds apart needs no push (an intersection test, a tenth of
+/// the push out; a TriMesh has no support points for `corner_reach`'s own bound). (Lifted by
+/// the resting slop only, about a third of the TriMesh-floor stress scene's pushes found their
+/// pair within what they would leave: 236 pushes in 300 steps on its hook side, 189 with this
+/// lift.)
+pub(super) fn resting_within(
+    (r, corner_reach): (&RapierContact, Real),
+    keep: Real,
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (co, pose_now): (&rapier3d::geometry::Collider, &Pose),
+) -> bool {
+    r.depth + corner_reach <= keep
+        || (r.depth <= keep
+            && apart_when_lifted((partner, partner_pose), (co, pose_now), r.normal * keep))
+}
+
+/// Whether a slow pair (one that moved less than its safe step, so that it cannot have passed
+/// through) is surely within the slop, and left to rapier: `rapier` its contact re-read at the
+/// poses now (`trusted` when the pair moved little enough for its points to be read;
+/// `corner_reach` how far a turn may have brought another corner past them), `travel` the
+/// pair's relative travel over the step, `overlapped` when rapier had it in contact when the
+/// step began, `curved` for a pair with a curved shape; `resting_slop` and `slop` as the
+/// guard's options say.
+///
+/// Rapier's own contact points, re-read at the poses now, say how deep the pair is; with no
+/// points rapier found it apart (beyond its prediction distance) when the step began, so it
+/// can be no deeper than the pair's relative travel.
+///
+/// Points rapier had but that moved too far to be read (a body sliding faster than the
+/// prediction distance per step): moved out along rapier's normal by the slop, a pair GJK
+/// finds apart overlaps by no more than the slop (a sliding cube on a TriMesh floor was
+/// otherwise reconstructed every step). A pair already in contact when the step began is only
+/// ever pushed back to the resting slop along that normal, so it is lifted by that: rapier's
+/// own resting overlap (up to a millimetre) is deeper than the slop, and 677 of the TriMesh
+/// stress scene's 911 reconstructions were such pairs, none corrected. So are trusted points
+/// a turn may have brought another corner past (`corner_reach`).
+pub(super) fn slow_pair_calm(
+    (rapier, trusted, corner_reach): (Option<RapierContact>, bool, Real),
+    (travel, overlapped, curved): (Real, bool, bool),
+    (resting_slop, slop): (Real, Real),
+    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
+    (co, pose_now): (&rapier3d::geometry::Collider, &Pose),
+) -> bool {
+    let bound = match rapier {
+        Some(r) if trusted => r.depth + corner_reach,
+        _ => travel,
+    };
+    if bound <= slop {
+        return true;
+    }
+    let Some(r) = rapier.filter(|_| !trusted || corner_reach > 0.0) else {
+        return false;
+    };
+    let lift = if overlapped {
+        resting_slop.max(slop)
+    } else {
+        slop
+    };
+    // One axis first (rapier's normal): two support points.
+    if within_along((partner, partner_pose), (co, pose_now), r.normal, lift) {
+        return true;
+    }
+    // A curved pair (a rolling rounded hull, whose re-read normal can be off): parry's exact
+    // query, the one its reconstruction walks on, says how deep it is; within the lift it is
+    // left to rapier, as the pairs rapier has no points for are below (7,000 of the hull
+    // scene's 10,000 reconstructions were such pairs already in contact, almost none
+    // corrected). Asked before the lifted test below, which only one in five of that scene's
+    // pairs passed (either one lets a pair go: the order only saves queries).
+    if curved && parry_depth((partner, partner_pose), (co, pose_now)).is_some_and(|d| d <= lift) {
+        return true;
+    }
+    apart_when_lifted((partner, partner_pose), (co, pose_now), r.normal * lift)
 }
 
 /// Whether `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by less than `gap` along
