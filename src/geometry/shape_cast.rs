@@ -82,13 +82,8 @@ impl Reconstructor {
             return Err(ReconstructionError::NonFinitePose);
         }
         let sphere = moving.compute_local_bounding_sphere();
-        let q = PairQuery::new(
-            fixed,
-            pos_fixed,
-            moving,
-            self.options.tolerance,
-            [motion.start.translation, motion.end.translation],
-        );
+        let places = [motion.start.translation, motion.end.translation];
+        let q = PairQuery::new(fixed, pos_fixed, moving, self.options.tolerance, places);
         let tol = q.tol;
         // The farthest any point of `moving` travels over the step: a bound on its speed
         // toward `fixed` (per unit of `t`).
@@ -106,7 +101,6 @@ impl Reconstructor {
         let drift = ((c1 - c0).as_vec3(), (motion.dangle() * turning) as Real);
         // The walk along the path asks a huge box only for its part near the path (the same
         // first touch: see `near_part`), the contacts below the whole box.
-        let places = [motion.start.translation, motion.end.translation];
         let near = near_part(
             fixed,
             pos_fixed,

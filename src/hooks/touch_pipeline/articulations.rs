@@ -20,6 +20,13 @@ pub(super) fn articulated(world: &PhysicsWorld, bh: RigidBodyHandle) -> bool {
         && world.impulse_joints.attached_joints(bh).next().is_some()
 }
 
+/// Whether body `bh` is a multibody's link, whose pose rapier computes from the multibody's
+/// joint coordinates: the guard never moves it ([`TouchPipeline::movers`], and no share of a
+/// correction).
+pub(super) fn multibody_link(world: &PhysicsWorld, bh: RigidBodyHandle) -> bool {
+    world.multibody_joints.rigid_body_link(bh).is_some()
+}
+
 /// Whether bodies `a` and `b` are joined through a path of impulse joints (within
 /// [`MAX_LINKS`] bodies of `a`).
 pub(super) fn same_articulation(

@@ -2,6 +2,7 @@
 //! share of the way when the partner is dynamic too), and the velocity that still closes on
 //! the partner is taken off, as a plastic impact would.
 
+use super::articulations::multibody_link;
 use super::pair_view::PairState;
 use super::rapier_contacts::{collider_pose_now, supported};
 use super::*;
@@ -71,7 +72,7 @@ pub(super) fn apply_correction(
     // (Nor is a multibody's link moved: rapier computes its pose from the multibody's joint
     // coordinates, `movers`.)
     let partner_mass = partner_body
-        .filter(|pb| world.multibody_joints.rigid_body_link(*pb).is_none())
+        .filter(|pb| !multibody_link(world, *pb))
         .and_then(|pb| world.bodies.get(pb))
         .filter(|b| b.is_dynamic())
         .filter(|_| !supported(world, ph))

@@ -1,5 +1,6 @@
 //! Which bodies the step guard looks at, and the pair states it forgets.
 
+use super::articulations::multibody_link;
 use super::*;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
@@ -27,7 +28,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
             .filter(|(h, b)| {
                 (b.is_dynamic() || self.tools.contains_key(h))
                     && !b.is_sleeping()
-                    && world.multibody_joints.rigid_body_link(*h).is_none()
+                    && !multibody_link(world, *h)
                     && b.colliders()
                         .iter()
                         .any(|c| self.hooks.meshes.contains_key(c))
