@@ -5,7 +5,9 @@ use super::events::{self, PairTouchEvent, PairTracker};
 use super::pair_filter::{rapier_solves_pair, user_removes_contact};
 use super::pose_history::PoseHistory;
 use super::report::{PairReport, ToolFeedback};
-use super::step_motion::{body_motion, collider_reach, previous_collider_pose, shape_reach};
+use super::step_motion::{
+    body_motion, collider_reach, previous_collider_pose, relative_motion, shape_reach,
+};
 use super::touch_hooks::{
     meshed_exactly, pair_configuration, shape_key, CachedMesh, ShapeKey, TouchHooks,
 };
@@ -33,6 +35,7 @@ mod pair_view;
 pub(crate) mod pose_sync;
 mod rapier_contacts;
 mod swept;
+mod swept_calm;
 
 use pair_view::PairStates;
 

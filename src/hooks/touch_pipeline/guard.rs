@@ -11,6 +11,7 @@ use super::pair_view::{
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting_slop};
 use super::swept::{swept_partners, StillPartners};
+use super::swept_calm::stayed_within_slop;
 use super::*;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
@@ -438,6 +439,22 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     }
                                     SlowPair::Reconstruct => {}
                                 }
+                            }
+                            // A fast pair with a still partner that stayed within the slop
+                            // over the whole step (`swept_calm.rs`).
+                            if !self.options.report_touching
+                                && !is_tool
+                                && !partner_dynamic
+                                && may_tunnel
+                                && stayed_within_slop(
+                                    (world, &self.hooks.prev_poses),
+                                    (partner, &partner_pose),
+                                    (co, &pose_now, &mesh),
+                                    rapier.map(|r| r.normal),
+                                    (travel, slop),
+                                )
+                            {
+                                continue;
                             }
                             // A pair whose first touch is not on the step is pushed out along
                             // rapier's normal (below): its way out along the path is walked
