@@ -32,7 +32,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
     /// relative to its partner since ([`PairState`]) stays under the slop is skipped. Other
     /// pairs get parry's contact query, and a reconstruction only when it finds them deeper
     /// than the slop (or when parry has no query for the shapes, such as TriMesh against
-    /// TriMesh).
+    /// TriMesh). A fast body whose path kept it within the slop of a still partner along one
+    /// direction is not reconstructed either (`swept_calm.rs`).
     pub(super) fn guard(&mut self, world: &mut PhysicsWorld) {
         let passes = if self.options.correct_poses {
             self.options.max_passes.max(1)

@@ -3,10 +3,10 @@
 //! left to rapier before its path is reconstructed.
 //!
 //! On rapier's CCD stress scene (balls, capsules, cones, cylinders and cubes shot at a 200 m
-//! floor at 1000 m/s, then bouncing and rolling on it) about three in four of the guard's
-//! reconstructions were of such pairs: bodies faster than the floor's safe step rolling or
-//! sliding on it, reconstructed every step and found touching, separated, or already
-//! overlapping by rapier's resting amount, none of them corrected.
+//! floor at 1000 m/s, then bouncing and rolling on it) about two in three of the guard's
+//! reconstructions were of bodies faster than the floor's safe step rolling, sliding or
+//! bouncing on it, nearly all found touching, apart, or overlapping since the step began (at
+//! most one in twenty corrected); this check let 5,100 of its 18,300 go (README, stop 55).
 
 use super::pair_view::{overlap_along, parry_overlap_within};
 use super::relative_motion;
