@@ -37,6 +37,7 @@ mod rigid_motion;
 mod round_tools;
 mod shape_meshes;
 mod sharp_tools;
+mod skimming;
 mod spinning_drop;
 mod stress_scenes;
 mod surface;

@@ -1,0 +1,268 @@
+//! Fast bodies skimming a thin fixed plate, through the touch pipeline in both opt-in modes:
+//! every support-map shape, 1 mm to 10 km, sliding and spinning along the plate faster than
+//! its safe step (its thickness) each step, coming down onto it at a slant. The guard leaves
+//! such a pair to rapier when the body stayed within the slop of the plate over the whole step
+//! (`swept_calm.rs`), and walks it back or pushes it out otherwise: either way none goes
+//! through the plate, and none ends deeper in it than a quarter of its thickness (over 400
+//! cases of these ranges, vanilla rapier's went up to 1.9 times the thickness into it, the
+//! crate's before stop 55 up to 0.67 of it, now up to 0.19).
+//!
+//! Known failures, kept ignored below:
+//! - plates a hundred or more times the body's size, at 20-80 sizes a second: a cone went 0.3-0.5
+//!   of the thickness in on a plate 200 times its size; on one 2,000 times its size cones,
+//!   cylinders and capsules went up to 4.5, 3.5 and 0.5 thicknesses in (vanilla rapier 5.5, 3.5
+//!   and 1.0). The push out of a curved pair along rapier's normal still asks parry's `f32`
+//!   queries of the whole box, which read such a cone apart while it is metres in (README);
+//! - bodies of 0.1-0.2 mm: capsules, hulls and cylinders fall through a plate of 4-9 µm, as in
+//!   vanilla rapier.
+
+use proptest::prelude::*;
+use rapier_touch::prelude::*;
+use rapier_touch::rapier3d::prelude::*;
+
+/// The movers, `h` across.
+fn shape(which: usize, h: f32) -> ColliderBuilder {
+    match which {
+        0 => ColliderBuilder::ball(0.5 * h),
+        1 => ColliderBuilder::capsule_x(0.5 * h, 0.3 * h),
+        2 => ColliderBuilder::cone(0.5 * h, 0.5 * h),
+        3 => ColliderBuilder::round_cylinder(0.4 * h, 0.4 * h, 0.05 * h),
+        4 => ColliderBuilder::cuboid(0.5 * h, 0.2 * h, 0.35 * h),
+        _ => ColliderBuilder::convex_hull(&[
+            Vector::new(-0.5, -0.3, -0.2) * h,
+            Vector::new(0.6, -0.2, -0.3) * h,
+            Vector::new(0.1, 0.5, -0.1) * h,
+            Vector::new(0.0, -0.1, 0.6) * h,
+            Vector::new(-0.3, 0.4, 0.4) * h,
+        ])
+        .unwrap(),
+    }
+}
+
+/// A mover `which` of size `h` (rapier's `length_unit`, gravity scaled by it) over a fixed
+/// plate `thick` thick (top at 0, `2 wide h` across), its lowest point `gap` over the plate,
+/// moving at `v` and turning at `w`, stepped `steps` times through the touch pipeline (`hooks`:
+/// opted in by hook flag, else tracked). Returns the deepest the mover's lowest point went
+/// below the plate's top after any step (0 above it), and whether its centre of mass ever
+/// went below the plate's bottom. (Measured from support points: parry's contact query on a
+/// plate a thousand times the mover's size reads millimetres off at the large scales.)
+fn skim(
+    (which, h, thick, wide, steps): (usize, f32, f32, f32, usize),
+    (gap, v, w, turn): (f32, Vector, Vector, Rotation),
+    hooks: bool,
+) -> (f32, bool) {
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.length_unit = h;
+    world.gravity *= h;
+    TouchPipeline::configure(&mut world.integration_parameters);
+    let mut touch = TouchPipeline::default();
+    let opt_in = |c: ColliderBuilder| {
+        if hooks {
+            c.active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+        } else {
+            c
+        }
+    };
+    let plate = world.insert_collider(
+        opt_in(
+            ColliderBuilder::cuboid(wide * h, 0.5 * thick, wide * h).translation(Vector::new(
+                0.0,
+                -0.5 * thick,
+                0.0,
+            )),
+        ),
+        None,
+    );
+    let collider = shape(which, h).build();
+    let sm = collider.shape().as_support_map().unwrap();
+    let low = sm.support_point_toward(&Pose::from_parts(Vector::ZERO, turn), -Vector::Y);
+    let body = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, gap - low.y, 0.0))
+            .rotation(turn.to_scaled_axis())
+            .linvel(v)
+            .angvel(w),
+    );
+    let co = world.insert_collider(opt_in(shape(which, h)), Some(body));
+    if !hooks {
+        touch.track_collider(co);
+        touch.track_collider(plate);
+    }
+    let mut deepest: f32 = 0.0;
+    let mut through = false;
+    for _ in 0..steps {
+        touch.step(&mut world);
+        let pose = *world.colliders[co].position();
+        let bottom = world.colliders[co]
+            .shape()
+            .as_support_map()
+            .unwrap()
+            .support_point_toward(&pose, -Vector::Y)
+            .y;
+        deepest = deepest.max(-bottom);
+        through |= world.bodies[body].center_of_mass().y < -thick;
+    }
+    (deepest, through)
+}
+
+/// The property's checks on one case: never through, never past a quarter of the thickness.
+fn check(
+    (which, h, wide): (usize, f32, f32),
+    (gap, speed, heading, down): (f32, f32, f32, f32),
+    w: Vector,
+    turn: Rotation,
+) -> Result<(), String> {
+    let thick = 0.04 * h;
+    let v = Vector::new(speed * heading.cos(), -down, speed * heading.sin()) * h;
+    for hooks in [true, false] {
+        let (deepest, through) = skim((which, h, thick, wide, 50), (gap * h, v, w, turn), hooks);
+        if through || deepest > 0.25 * thick {
+            return Err(format!(
+                "shape {which} at {h} m, hooks {hooks}: through {through}, {:.3} of the thickness deep",
+                deepest / thick
+            ));
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// Six shapes at 1 mm to 10 km, 1-5 % of their size over a plate 4 % of it thick and 100
+    /// times it across, sliding at 10-40 sizes a second (a sixth to two thirds of a size a
+    /// step, four to sixteen times the plate's thickness) and coming down at up to 5 sizes a
+    /// second, spinning at up to 12 rad/s: never through the plate, and never more than a
+    /// quarter of its thickness into it, in both opt-in modes.
+    #[test]
+    fn fast_bodies_skimming_a_thin_plate_never_go_through_or_sink_in(
+        which in 0usize..6,
+        log_h in -3.0f32..4.0,
+        gap in 0.01f32..0.05,
+        (speed, heading, down) in (10.0f32..40.0, 0.0f32..6.3, 0.0f32..5.0),
+        (wx, wy, wz) in (-12.0f32..12.0, -12.0f32..12.0, -12.0f32..12.0),
+        (ax, ay, az, angle) in (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0, 0.0f32..3.1),
+    ) {
+        let axis = Vector::new(ax, ay, az).try_normalize().unwrap_or(Vector::Y);
+        let r = check(
+            (which, 10f32.powf(log_h), 50.0),
+            (gap, speed, heading, down),
+            Vector::new(wx, wy, wz),
+            Rotation::from_axis_angle(axis, angle),
+        );
+        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+    }
+}
+
+/// One skimming case: shape, size, gap (of the size), velocity, spin, turn (x, y, z, w).
+type Case = (usize, f32, f32, [f32; 3], [f32; 3], [f32; 4]);
+
+/// Five cases the property above found in the crate as it was before stop 55 (a 400-case run of
+/// the same ranges): cones and capsules of 4 cm to 940 m it left 0.28-0.67 of the plate's
+/// thickness deep (vanilla rapier: 0.17-1.36). Each case: shape, size, gap (of the size),
+/// velocity (world), spin, turn (quaternion x, y, z, w).
+const SANK_BEFORE: [Case; 5] = [
+    (
+        2,
+        0.043338187,
+        0.019917004,
+        [-1.2626779, -0.0063310685, -0.19665352],
+        [-9.776004, -9.887585, -0.2706566],
+        [0.047553957, -0.046101697, -0.05799625, 0.9961173],
+    ),
+    (
+        2,
+        0.036142454,
+        0.012434883,
+        [-0.0961872, -0.06294435, 0.6380248],
+        [3.7314491, -10.573424, -10.715986],
+        [-0.20787123, 0.21594916, 0.16258647, 0.94006443],
+    ),
+    (
+        1,
+        7.9322243,
+        0.03350276,
+        [-278.4276, -5.349001, -33.665554],
+        [-7.006733, -8.4872055, -4.283328],
+        [-0.16166198, -0.13876693, -0.067597084, 0.97469985],
+    ),
+    (
+        2,
+        0.9672378,
+        0.019616466,
+        [-21.214972, -1.6816258, -15.587997],
+        [4.262211, 5.248802, 9.90262],
+        [-0.021871114, -0.021734318, 0.046565052, 0.99843925],
+    ),
+    (
+        1,
+        937.95764,
+        0.017800083,
+        [-11276.127, -1695.7948, 12590.071],
+        [-2.7496586, 11.181759, 10.187857],
+        [-0.108287774, 0.6889883, 0.27917942, 0.66002095],
+    ),
+];
+
+/// The cases above stay within a quarter of the plate's thickness (0.5-5 % of it now).
+#[test]
+fn cones_and_capsules_the_guard_let_sink_stay_out() {
+    for (which, h, gap, v, w, q) in SANK_BEFORE {
+        let v = Vector::from(v) / h;
+        let speed = (v.x * v.x + v.z * v.z).sqrt();
+        let r = check(
+            (which, h, 50.0),
+            (gap, speed, v.z.atan2(v.x), -v.y),
+            Vector::from(w),
+            Rotation::from_xyzw(q[0], q[1], q[2], q[3]),
+        );
+        assert!(r.is_ok(), "{}", r.unwrap_err());
+    }
+}
+
+/// A ball sliding at 70 sizes a second over a plate, spinning (friction spins it up toward
+/// rolling), at 1 cm and 1 km. rapier's contact points are material points: as the ball rolls
+/// they ride up its side and read the pair apart while rapier lets it sink, about 1 % of its
+/// size in 1.5 s (0.28 of the plate's thickness, vanilla rapier alike). The guard now measures
+/// a turned ball or capsule on the shapes: it stays within a tenth of the thickness (4 % of it
+/// here; 0.26 before).
+#[test]
+fn a_ball_sliding_and_spinning_up_on_a_plate_does_not_sink() {
+    for h in [1.327_646_3e-2, 1e3] {
+        let thick = 0.04 * h;
+        let v = Vector::new(-32.43, -5.605, 62.19) * h;
+        let w = Vector::new(7.052_841, -2.604_147, 7.564_304_4);
+        let turn = Rotation::from_xyzw(-0.102_343_25, 0.160_816_64, 0.158_539_58, 0.968_777_1);
+        for hooks in [true, false] {
+            let (deepest, through) =
+                skim((0, h, thick, 200.0, 90), (0.0454 * h, v, w, turn), hooks);
+            assert!(
+                !through && deepest <= 0.1 * thick,
+                "{h} m, hooks {hooks}: {:.3} of the thickness deep",
+                deepest / thick
+            );
+        }
+    }
+}
+
+/// Known failures (see the module's docs), found by the property above run over wider ranges:
+/// a cone 1 m across on a plate 2 km wide goes 3.6 thicknesses in (parry's `f32` queries on a
+/// box a thousand times its size), and a capsule 0.26 mm long falls through a 10 µm plate, in
+/// vanilla rapier too. Run with `cargo test --release -- --ignored skimming`.
+#[test]
+#[ignore = "known failure: a huge plate, and sub-millimetre bodies"]
+fn a_cone_on_a_huge_plate_and_a_tiny_capsule_stay_out() {
+    let cone = check(
+        (2, 1.0, 1000.0),
+        (0.01, 20.0, 0.0, 0.0),
+        Vector::new(-6.147_085_7, 0.0, 0.0),
+        Rotation::from_axis_angle(-Vector::Z, 2.013_533),
+    );
+    let capsule = check(
+        (1, 2.647_295_8e-4, 60.0),
+        (0.0245, 77.44, 2.218, 1.8225),
+        Vector::new(0.508_049, 5.185_16, 3.806_108_5),
+        Rotation::from_xyzw(0.143_822_88, -0.318_485_7, -0.435_156_08, 0.829_771_7),
+    );
+    assert!(cone.is_ok() && capsule.is_ok(), "{cone:?} {capsule:?}");
+}
