@@ -14,7 +14,8 @@
 //!   and 1.0). The push out of a curved pair along rapier's normal still asks parry's `f32`
 //!   queries of the whole box, which read such a cone apart while it is metres in (README);
 //! - bodies of 0.1-0.2 mm: capsules, hulls and cylinders fall through a plate of 4-9 µm, as in
-//!   vanilla rapier.
+//!   vanilla rapier;
+//! - a 1 km hull grazing the plate at 47 sizes a second is stopped dead after 24 steps.
 
 use proptest::prelude::*;
 use rapier_touch::prelude::*;
@@ -41,23 +42,26 @@ fn shape(which: usize, h: f32) -> ColliderBuilder {
 
 /// A mover `which` of size `h` (rapier's `length_unit`, gravity scaled by it) over a fixed
 /// plate `thick` thick (top at 0, `2 wide h` across), its lowest point `gap` over the plate,
-/// moving at `v` and turning at `w`, stepped `steps` times through the touch pipeline (`hooks`:
-/// opted in by hook flag, else tracked). Returns the deepest the mover's lowest point went
-/// below the plate's top after any step (0 above it), and whether its centre of mass ever
-/// went below the plate's bottom. (Measured from support points: parry's contact query on a
-/// plate a thousand times the mover's size reads millimetres off at the large scales.)
+/// moving at `v` and turning at `w`, stepped `steps` times through the touch pipeline
+/// (`Some(hooks)`: opted in by hook flag, else tracked) or by vanilla rapier (`None`, its
+/// defaults). Returns the deepest the mover's lowest point went below the plate's top after
+/// any step (0 above it), whether its centre of mass ever went below the plate's bottom, and
+/// its velocity at the end. (Measured from support points: parry's contact query on a plate a
+/// thousand times the mover's size reads millimetres off at the large scales.)
 fn skim(
     (which, h, thick, wide, steps): (usize, f32, f32, f32, usize),
     (gap, v, w, turn): (f32, Vector, Vector, Rotation),
-    hooks: bool,
-) -> (f32, bool) {
+    mode: Option<bool>,
+) -> (f32, bool, Vector) {
     let mut world = PhysicsWorld::default();
     world.integration_parameters.length_unit = h;
     world.gravity *= h;
-    TouchPipeline::configure(&mut world.integration_parameters);
+    if mode.is_some() {
+        TouchPipeline::configure(&mut world.integration_parameters);
+    }
     let mut touch = TouchPipeline::default();
     let opt_in = |c: ColliderBuilder| {
-        if hooks {
+        if mode == Some(true) {
             c.active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS)
         } else {
             c
@@ -84,14 +88,17 @@ fn skim(
             .angvel(w),
     );
     let co = world.insert_collider(opt_in(shape(which, h)), Some(body));
-    if !hooks {
+    if mode == Some(false) {
         touch.track_collider(co);
         touch.track_collider(plate);
     }
     let mut deepest: f32 = 0.0;
     let mut through = false;
     for _ in 0..steps {
-        touch.step(&mut world);
+        match mode {
+            Some(_) => touch.step(&mut world),
+            None => world.step(),
+        }
         let pose = *world.colliders[co].position();
         let bottom = world.colliders[co]
             .shape()
@@ -102,7 +109,7 @@ fn skim(
         deepest = deepest.max(-bottom);
         through |= world.bodies[body].center_of_mass().y < -thick;
     }
-    (deepest, through)
+    (deepest, through, world.bodies[body].linvel())
 }
 
 /// The property's checks on one case: never through, never past a quarter of the thickness.
@@ -115,7 +122,11 @@ fn check(
     let thick = 0.04 * h;
     let v = Vector::new(speed * heading.cos(), -down, speed * heading.sin()) * h;
     for hooks in [true, false] {
-        let (deepest, through) = skim((which, h, thick, wide, 50), (gap * h, v, w, turn), hooks);
+        let (deepest, through, _) = skim(
+            (which, h, thick, wide, 50),
+            (gap * h, v, w, turn),
+            Some(hooks),
+        );
         if through || deepest > 0.25 * thick {
             return Err(format!(
                 "shape {which} at {h} m, hooks {hooks}: through {through}, {:.3} of the thickness deep",
@@ -234,8 +245,11 @@ fn a_ball_sliding_and_spinning_up_on_a_plate_does_not_sink() {
         let w = Vector::new(7.052_841, -2.604_147, 7.564_304_4);
         let turn = Rotation::from_xyzw(-0.102_343_25, 0.160_816_64, 0.158_539_58, 0.968_777_1);
         for hooks in [true, false] {
-            let (deepest, through) =
-                skim((0, h, thick, 200.0, 90), (0.0454 * h, v, w, turn), hooks);
+            let (deepest, through, _) = skim(
+                (0, h, thick, 200.0, 90),
+                (0.0454 * h, v, w, turn),
+                Some(hooks),
+            );
             assert!(
                 !through && deepest <= 0.1 * thick,
                 "{h} m, hooks {hooks}: {:.3} of the thickness deep",
@@ -245,13 +259,48 @@ fn a_ball_sliding_and_spinning_up_on_a_plate_does_not_sink() {
     }
 }
 
+/// A convex hull sliding at 47 sizes a second over a plate, its path grazing it (found by the
+/// property above run at 20-80 sizes a second). It was walked back along its path to its first
+/// touch, most of a step, and its velocity along the way back removed: it stopped dead (then
+/// sank 0.4 of the plate's thickness in while rapier held no contact for it). A graze is now
+/// pushed out along the contact's normal: the hull slides on as in vanilla rapier (at least 90 %
+/// of vanilla's speed along the plate after 40 steps), within a tenth of the thickness, at
+/// 5.6 cm and at 1 m. (At 1 km it still stops dead, on another defect: see the ignored test
+/// below.)
+#[test]
+fn a_hull_grazing_a_plate_slides_on() {
+    for h in [5.623_478e-2, 1.0] {
+        let thick = 0.04 * h;
+        let v = Vector::new(2.270_411_3, -0.285_412_85, 1.690_771_5) / 5.623_478e-2 * h;
+        let w = Vector::new(7.586_412_4, 8.063_885, 2.591_535_6);
+        let turn = Rotation::from_xyzw(0.373_879_55, 0.204_480_14, 0.3616, 0.829_245_1);
+        let along = |v: Vector| Vector::new(v.x, 0.0, v.z).length() / h;
+        let case = (0.033_230_573 * h, v, w, turn);
+        let (_, _, vanilla) = skim((5, h, thick, 100.0, 40), case, None);
+        for hooks in [true, false] {
+            let (deepest, through, end) = skim((5, h, thick, 100.0, 40), case, Some(hooks));
+            assert!(
+                !through && deepest <= 0.1 * thick && along(end) >= 0.9 * along(vanilla),
+                "{h} m, hooks {hooks}: {:.3} of the thickness deep, sliding at {:.1} sizes a \
+                 second (vanilla {:.1})",
+                deepest / thick,
+                along(end),
+                along(vanilla)
+            );
+        }
+    }
+}
+
 /// Known failures (see the module's docs), found by the property above run over wider ranges:
 /// a cone 1 m across on a plate 2 km wide goes 3.6 thicknesses in (parry's `f32` queries on a
 /// box a thousand times its size), and a capsule 0.26 mm long falls through a 10 µm plate, in
-/// vanilla rapier too. Run with `cargo test --release -- --ignored skimming`.
+/// vanilla rapier too; and the hull of `a_hull_grazing_a_plate_slides_on` at 1 km, which slides
+/// on for 24 steps and then stops dead: a reconstruction reads its path reversed and 0.74 of its
+/// size deep, walks it back and removes its velocity (not traced further). Run with `cargo test
+/// --release -- --ignored skimming`.
 #[test]
-#[ignore = "known failure: a huge plate, and sub-millimetre bodies"]
-fn a_cone_on_a_huge_plate_and_a_tiny_capsule_stay_out() {
+#[ignore = "known failure: a huge plate, sub-millimetre bodies, a 1 km hull stopped"]
+fn a_cone_on_a_huge_plate_a_tiny_capsule_and_a_large_hull_behave() {
     let cone = check(
         (2, 1.0, 1000.0),
         (0.01, 20.0, 0.0, 0.0),
@@ -264,5 +313,20 @@ fn a_cone_on_a_huge_plate_and_a_tiny_capsule_stay_out() {
         Vector::new(0.508_049, 5.185_16, 3.806_108_5),
         Rotation::from_xyzw(0.143_822_88, -0.318_485_7, -0.435_156_08, 0.829_771_7),
     );
-    assert!(cone.is_ok() && capsule.is_ok(), "{cone:?} {capsule:?}");
+    let h = 1e3;
+    let (_, _, end) = skim(
+        (5, h, 0.04 * h, 100.0, 40),
+        (
+            0.033_230_573 * h,
+            Vector::new(2.270_411_3, -0.285_412_85, 1.690_771_5) / 5.623_478e-2 * h,
+            Vector::new(7.586_412_4, 8.063_885, 2.591_535_6),
+            Rotation::from_xyzw(0.373_879_55, 0.204_480_14, 0.3616, 0.829_245_1),
+        ),
+        Some(true),
+    );
+    let hull_speed = Vector::new(end.x, 0.0, end.z).length() / h;
+    assert!(
+        cone.is_ok() && capsule.is_ok() && hull_speed > 40.0,
+        "{cone:?} {capsule:?}, the 1 km hull slides at {hull_speed} sizes a second"
+    );
 }

@@ -3,7 +3,7 @@
 //! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
 
 use super::articulations::{articulated, same_articulation};
-use super::correction::{apply_correction, undone_almost_whole};
+use super::correction::{apply_correction, normal_toward_mover, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
 use super::pair_view::{
     push_out, resting_within, safe_step, slow_pair_calm, Mover, PairStates, PairView,
@@ -13,6 +13,10 @@ use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting
 use super::swept::{swept_partners, StillPartners};
 use super::swept_calm::stayed_within_slop;
 use super::*;
+
+/// Below this cosine between a path and its contact's normal the path grazes the contact plane
+/// (about 15° from it).
+const GRAZE: Real = 0.25;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
@@ -508,13 +512,34 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             let blocked_at_start = config.on_trajectory
                                 && partner.shape().is_convex()
                                 && ((overlapped && undone_almost_whole(&config)) || rolling());
-                            let along_normal = if (config.on_trajectory && !blocked_at_start)
+                            // A polyhedral path that met a still, convex partner at a graze
+                            // (within about 15° of the contact plane) is pushed out along the
+                            // contact's normal too, keeping its motion along the plane: walked
+                            // back along its path, a hull sliding at 40 sizes a second over a
+                            // plate went back most of a step, and stopped dead. (Not a curved
+                            // pair: its push asks parry of the whole partner, which read cones
+                            // on a plate 200 times their size apart while they were in it, and
+                            // they went through.)
+                            let graze_normal = normal_toward_mover(&config).filter(|n| {
+                                config.on_trajectory
+                                    && !blocked_at_start
+                                    && !partner_dynamic
+                                    && !curved
+                                    && partner.shape().is_convex()
+                                    && n.dot(config.direction).abs() < GRAZE
+                            });
+                            let along_normal = if (config.on_trajectory
+                                && !blocked_at_start
+                                && graze_normal.is_none())
                                 || !config.needs_correction()
                             {
                                 None
+                            } else if let Some(n) = graze_normal {
+                                push_out(n)
                             } else {
                                 rapier_normal(world, ph, ch).and_then(push_out)
                             };
+                            let blocked_at_start = blocked_at_start || graze_normal.is_some();
                             let config = match along_normal {
                                 None if !config.on_trajectory && config.needs_correction() => {
                                     let Some(c) = configuration(&mut self.reconstructor, false)
