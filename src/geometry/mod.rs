@@ -26,6 +26,7 @@ pub use contact::{
     ContactConfiguration, ContactKind, ContactPatch, ContactPoint, DirectionSource, TouchState,
 };
 pub use motion::RigidMotion;
+pub(crate) use motion::GRAZING;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
 pub use surface_bvh::{NearCache, SurfaceBvh};
 pub use surface_contact::{

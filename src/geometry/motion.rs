@@ -7,9 +7,10 @@ use super::touch_mesh::TouchMesh;
 use crate::math::{Pose, Real, Vector};
 use glamx::{DQuat, DVec3};
 
-/// The cosine below which a sub-step's direction grazes a contact plane (about 75° off its
-/// normal): a touch found within the tolerance along it is looked at again.
-const GRAZING: Real = 0.25;
+/// The cosine below which a direction grazes a contact plane (about 75° off its normal, 15°
+/// from the plane): a sub-step's touch found within the tolerance along it is looked at again,
+/// and the step guard pushes such a path out along the normal instead of walking it back.
+pub(crate) const GRAZING: Real = 0.25;
 
 /// The motion of a rigid object over one step, as rapier integrates a body: the object's
 /// centre of mass `local_center` (in the object's own frame) moves on a straight line from its

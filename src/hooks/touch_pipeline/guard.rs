@@ -14,10 +14,6 @@ use super::swept::{swept_partners, StillPartners};
 use super::swept_calm::stayed_within_slop;
 use super::*;
 
-/// Below this cosine between a path and its contact's normal the path grazes the contact plane
-/// (about 15° from it).
-const GRAZE: Real = 0.25;
-
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
     /// touch, and records the reports.
@@ -526,7 +522,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     && !partner_dynamic
                                     && !curved
                                     && partner.shape().is_convex()
-                                    && n.dot(config.direction).abs() < GRAZE
+                                    && n.dot(config.direction).abs() < crate::geometry::GRAZING
                             });
                             let along_normal = if (config.on_trajectory
                                 && !blocked_at_start
