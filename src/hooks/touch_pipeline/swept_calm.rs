@@ -10,6 +10,7 @@
 
 use super::pair_view::{overlap_along, parry_overlap_within};
 use super::relative_motion;
+use crate::geometry::tool_boundary::rounded;
 use crate::geometry::{RigidMotion, TouchMesh};
 use crate::hooks::pose_history::PoseHistory;
 use crate::math::{Pose, Real, Vector};
@@ -121,18 +122,12 @@ fn core_reach(shape: &dyn Shape, center: Vector) -> Real {
     if let Some(c) = shape.as_capsule() {
         return from(c.segment.a).max(from(c.segment.b));
     }
-    let core = if let Some(s) = shape.as_round_cylinder() {
-        s.inner_shape.compute_local_aabb()
-    } else if let Some(s) = shape.as_round_cone() {
-        s.inner_shape.compute_local_aabb()
-    } else if let Some(s) = shape.as_round_cuboid() {
-        s.inner_shape.compute_local_aabb()
-    } else if let Some(s) = shape.as_round_convex_polyhedron() {
-        s.inner_shape.compute_local_aabb()
-    } else {
-        shape.compute_local_aabb()
-    };
-    core.vertices().into_iter().map(from).fold(0.0, Real::max)
+    let core = rounded(shape).map_or(shape, |(inner, _)| inner);
+    core.compute_local_aabb()
+        .vertices()
+        .into_iter()
+        .map(from)
+        .fold(0.0, Real::max)
 }
 
 #[cfg(test)]
