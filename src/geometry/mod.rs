@@ -12,6 +12,7 @@ mod classify;
 mod contact;
 pub mod generators;
 mod hull;
+mod mesh_separation;
 mod motion;
 mod reconstruction;
 mod shape_cast;
@@ -25,6 +26,7 @@ mod touch_mesh;
 pub use contact::{
     ContactConfiguration, ContactKind, ContactPatch, ContactPoint, DirectionSource, TouchState,
 };
+pub(crate) use mesh_separation::apart_from_mesh;
 pub use motion::RigidMotion;
 pub(crate) use motion::GRAZING;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};

@@ -4,7 +4,7 @@
 
 use super::rapier_contacts::{collider_pose_now, rapier_contact_of, RapierContact};
 use super::*;
-use crate::geometry::ContactConfiguration;
+use crate::geometry::{apart_from_mesh, ContactConfiguration};
 use crate::hooks::step_motion::point_travel;
 
 /// The overlap of a pair when it was last measured, and the mover's collider pose relative
@@ -422,6 +422,18 @@ pub(super) fn apart_when_lifted(
     lift: Vector,
 ) -> bool {
     let lifted = Pose::from_parts(pose.translation + lift, pose.rotation);
+    if let Some(mesh) = partner.shape().as_trimesh() {
+        if mover.shape().as_support_map().is_some() {
+            // parry's test below, triangle by triangle along the cheapest axes first
+            // (`mesh_separation.rs`, checked against parry's distance and depth).
+            return apart_from_mesh(
+                mesh,
+                mover.shape(),
+                &partner_pose.inv_mul(&lifted),
+                partner_pose.rotation.inverse() * lift,
+            );
+        }
+    }
     parry3d::query::intersection_test(partner_pose, partner.shape(), &lifted, mover.shape())
         .is_ok_and(|i| !i.intersecting)
 }
