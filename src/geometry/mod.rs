@@ -30,6 +30,7 @@ pub(crate) use mesh_separation::apart_from_mesh;
 pub use motion::RigidMotion;
 pub(crate) use motion::GRAZING;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
+pub(crate) use shape_cast::contact_near;
 pub use surface_bvh::{NearCache, SurfaceBvh};
 pub use surface_contact::{
     tool_surface_contacts, tool_surface_contacts_with_rings, triangles_in, SurfaceContact,

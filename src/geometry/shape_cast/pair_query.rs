@@ -284,19 +284,30 @@ impl<'a> PairQuery<'a> {
     /// The contact with `moving` at `pose` (in world space), if closer than twice the touch
     /// tolerance.
     pub(super) fn contact(&self, pose: &Pose) -> Option<query::Contact> {
+        self.contact_within(pose, 2.0 * self.touch).flatten()
+    }
+
+    /// The contact with `moving` at `pose` (in world space) if closer than `prediction`
+    /// (`Some(None)` when farther), `None` when parry has no query for the pair.
+    pub(super) fn contact_within(
+        &self,
+        pose: &Pose,
+        prediction: Real,
+    ) -> Option<Option<query::Contact>> {
         if !self.sized {
             return None;
         }
-        let prediction = 2.0 * self.touch;
         let c = match &self.convex {
             Some((f, m)) => {
                 let (bf, bm) = self.borders;
-                let c = query::details::contact_support_map_support_map(
+                let Some(c) = query::details::contact_support_map_support_map(
                     &self.scaled_pose(pose),
                     f,
                     m,
                     (prediction + bf + bm) / self.unit,
-                )?;
+                ) else {
+                    return Some(None);
+                };
                 // The inner shapes' contact, moved out to the borders along the normals.
                 query::Contact::new(
                     self.pos_fixed
@@ -307,10 +318,16 @@ impl<'a> PairQuery<'a> {
                     c.dist * self.unit - bf - bm,
                 )
             }
-            None => query::contact(&self.pos_fixed, self.fixed, pose, self.moving, prediction)
-                .ok()??,
+            None => {
+                match query::contact(&self.pos_fixed, self.fixed, pose, self.moving, prediction)
+                    .ok()?
+                {
+                    Some(c) => c,
+                    None => return Some(None),
+                }
+            }
         };
-        (c.dist.is_finite() && c.normal1.is_finite()).then_some(c)
+        Some((c.dist.is_finite() && c.normal1.is_finite()).then_some(c))
     }
 
     /// Conservative advancement (Mirtich) along `pose_at` over `[0, until]`: at a distance `d`

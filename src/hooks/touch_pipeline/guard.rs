@@ -13,6 +13,7 @@ use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting
 use super::swept::{swept_partners, StillPartners};
 use super::swept_calm::stayed_within_slop;
 use super::*;
+use crate::geometry::contact_near;
 
 impl<H: PhysicsHooks> TouchPipeline<H> {
     /// The step guard: moves bodies that penetrate (or went through something) back to first
@@ -385,6 +386,23 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 continue;
                             }
                         }
+                        // parry's contact normal at the pose now, on a huge box's part near
+                        // the mover (`geometry::contact_near`), against a still convex partner.
+                        let near_normal = |partner_dynamic: bool| {
+                            (!partner_dynamic && partner.shape().is_convex())
+                                .then(|| {
+                                    contact_near(
+                                        partner.shape(),
+                                        &partner_pose,
+                                        co.shape(),
+                                        &pose_now,
+                                        0.0,
+                                    )
+                                })
+                                .flatten()
+                                .flatten()
+                                .map(|c| c.normal1)
+                        };
                         let push_out = |out: Vector| {
                             push_out(
                                 self.options.reconstruction,
@@ -508,19 +526,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             let blocked_at_start = config.on_trajectory
                                 && partner.shape().is_convex()
                                 && ((overlapped && undone_almost_whole(&config)) || rolling());
-                            // A polyhedral path that met a still, convex partner at a graze
-                            // (within about 15° of the contact plane) is pushed out along the
-                            // contact's normal too, keeping its motion along the plane: walked
-                            // back along its path, a hull sliding at 40 sizes a second over a
-                            // plate went back most of a step, and stopped dead. (Not a curved
-                            // pair: its push asks parry of the whole partner, which read cones
-                            // on a plate 200 times their size apart while they were in it, and
-                            // they went through.)
+                            // A path that met a still, convex partner at a graze (within about
+                            // 15° of the contact plane) is pushed out along the contact's normal
+                            // too, keeping its motion along the plane: walked back along its
+                            // path, a hull sliding at 40 sizes a second over a plate went back
+                            // most of a step, and stopped dead, and so did a cone at 29 sizes a
+                            // second. (A curved pair's push asks only the near part of a huge
+                            // box: asked of the whole plate, 200 times their size, it read
+                            // cones apart while they were in it, and they went through.)
                             let graze_normal = normal_toward_mover(&config).filter(|n| {
                                 config.on_trajectory
                                     && !blocked_at_start
                                     && !partner_dynamic
-                                    && !curved
                                     && partner.shape().is_convex()
                                     && n.dot(config.direction).abs() < crate::geometry::GRAZING
                             });
@@ -533,7 +550,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             } else if let Some(n) = graze_normal {
                                 push_out(n)
                             } else {
-                                rapier_normal(world, ph, ch).and_then(push_out)
+                                // (rapier holds no normal for a pair it found apart when the
+                                // step began: parry's at the pose now, as below.)
+                                rapier_normal(world, ph, ch)
+                                    .or_else(|| near_normal(partner_dynamic))
+                                    .and_then(push_out)
                             };
                             let blocked_at_start = blocked_at_start || graze_normal.is_some();
                             let config = match along_normal {
@@ -582,6 +603,19 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // cube that had moved 5 mm; the push put it inside a ball.)
                         let deepest_possible =
                             travel + resting.map_or(0.0, |r| r.depth_at_start) + resting_slop;
+                        // A push along rapier's normal that is no measure may be along a wrong
+                        // normal (rapier's, against a box far larger than the mover, can be
+                        // tens of degrees off): pushed along parry's at the pose now instead,
+                        // asked of the box's part near the mover (`geometry::contact_near`).
+                        // A cone sliding on a plate 200 times its size was left 2.8 plate
+                        // thicknesses in, its push along rapier's normal 0.6 m long.
+                        let along_normal = match along_normal {
+                            Some(c) if c.depth > deepest_possible => near_normal(partner_dynamic)
+                                .and_then(push_out)
+                                .filter(|c| c.depth <= deepest_possible)
+                                .or(Some(c)),
+                            other => other,
+                        };
                         let config = match (&along_normal, on_path) {
                             (_, true) => config,
                             (Some(c), false) if c.depth <= deepest_possible && !partner_dynamic => {

@@ -4,7 +4,7 @@
 
 use super::rapier_contacts::{collider_pose_now, rapier_contact_of, RapierContact};
 use super::*;
-use crate::geometry::{apart_from_mesh, ContactConfiguration};
+use crate::geometry::{apart_from_mesh, contact_near, ContactConfiguration};
 use crate::hooks::step_motion::point_travel;
 
 /// The overlap of a pair when it was last measured, and the mover's collider pose relative
@@ -453,11 +453,12 @@ pub(super) fn parry_depth(
 }
 
 /// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
-/// query with a prediction of `margin`, and the contact's normal (world, out of `partner`)
-/// when parry found one. The overlap is negative for a pair apart (minus its distance, or
-/// minus `margin` when it is farther). `None` when parry has no query for the shapes or the
-/// answer is not finite. (Unlike [`parry_depth`], a positive distance is taken as parry's
-/// answer.)
+/// query with a prediction of `margin`, asked as the shape method asks it (a huge box only for
+/// its part near the mover: `geometry::contact_near`), and the contact's normal (world, out of
+/// `partner`) when parry found one. The overlap is negative for a pair apart (minus its
+/// distance, or minus `margin` when it is farther). `None` when parry has no query for the
+/// shapes or the answer is not finite. (Unlike [`parry_depth`], a positive distance is taken
+/// as parry's answer.)
 pub(super) fn parry_overlap_within(
     (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
     (mover, pose): (&rapier3d::geometry::Collider, &Pose),
@@ -468,8 +469,7 @@ pub(super) fn parry_overlap_within(
     } else {
         0.0
     };
-    parry3d::query::contact(partner_pose, partner.shape(), pose, mover.shape(), margin)
-        .ok()
+    contact_near(partner.shape(), partner_pose, mover.shape(), pose, margin)
         .map(|c| c.map_or((-margin, None), |c| (-c.dist, Some(c.normal1))))
         .filter(|(d, n)| d.is_finite() && n.is_none_or(|n| n.is_finite()))
 }
