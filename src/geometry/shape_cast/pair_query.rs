@@ -288,7 +288,8 @@ impl<'a> PairQuery<'a> {
     }
 
     /// The contact with `moving` at `pose` (in world space) if closer than `prediction`
-    /// (`Some(None)` when farther), `None` when parry has no query for the pair.
+    /// (`Some(None)` when farther), `None` when parry has no query for the pair or answers a
+    /// contact that is not finite.
     pub(super) fn contact_within(
         &self,
         pose: &Pose,
@@ -327,7 +328,8 @@ impl<'a> PairQuery<'a> {
                 }
             }
         };
-        Some((c.dist.is_finite() && c.normal1.is_finite()).then_some(c))
+        // (A contact that is not finite is no answer, not an answer of apart.)
+        (c.dist.is_finite() && c.normal1.is_finite()).then_some(Some(c))
     }
 
     /// Conservative advancement (Mirtich) along `pose_at` over `[0, until]`: at a distance `d`
