@@ -220,4 +220,31 @@ mod tests {
             "{separated} by the box axes, {not} meeting"
         );
     }
+
+    /// Bad input: a pose that is not finite, a shape with no support map (a TriMesh) and a ball
+    /// of no size. The first two are never called apart (the caller measures them another
+    /// way); a point is apart from the mesh exactly where it lies off every triangle.
+    #[test]
+    fn bad_input_is_not_called_apart() {
+        let mesh = hills(0.2);
+        let cube = parry3d::shape::Cuboid::new(Vector::splat(0.2));
+        let above = Pose::from_translation(Vector::new(1.5, 5.0, 1.5));
+        assert!(apart_from_mesh(&mesh, &cube, &above, Vector::Y));
+        for bad in [
+            Pose::from_translation(Vector::new(Real::NAN, 5.0, 1.5)),
+            Pose::from_translation(Vector::new(1.5, Real::INFINITY, 1.5)),
+        ] {
+            assert!(!apart_from_mesh(&mesh, &cube, &bad, Vector::Y));
+        }
+        // A zero or non-finite axis only loses the shared axis: the answer stays right.
+        assert!(apart_from_mesh(&mesh, &cube, &above, Vector::ZERO));
+        assert!(apart_from_mesh(&mesh, &cube, &above, Vector::NAN));
+        assert!(!apart_from_mesh(&mesh, &hills(0.1), &above, Vector::Y));
+        let point = parry3d::shape::Ball::new(0.0);
+        assert!(apart_from_mesh(&mesh, &point, &above, Vector::Y));
+        let below = Pose::from_translation(Vector::new(1.5, -5.0, 1.5));
+        assert!(apart_from_mesh(&mesh, &point, &below, Vector::Y));
+        let on = Pose::from_translation(mesh.vertices()[5]);
+        assert!(!apart_from_mesh(&mesh, &point, &on, Vector::Y));
+    }
 }
