@@ -194,7 +194,7 @@ proptest! {
 
     /// The same ranges on a plate 600 times the body's size across (300 on each side of it):
     /// parry's `f32` queries on the whole plate are millimetres to metres off there, and the
-    /// guard asks only the plate's part near the body (a 600-case run: at most 0.11 of the
+    /// guard asks only the plate's part near the body (a 400-case run: at most 0.11 of the
     /// thickness in for any shape, vanilla rapier up to 7.7 thicknesses).
     #[test]
     fn fast_bodies_skimming_a_plate_hundreds_of_times_their_size_stay_out(
