@@ -272,15 +272,16 @@ fn cones_and_capsules_the_guard_let_sink_stay_out() {
 }
 
 /// Cones on plates far larger than them, found by a 400-case run of the property's ranges on a
-/// plate 200 times the cone's size (the second and third) and by a wider one (the first, on a
-/// plate 2,000 times its size), with each case's plate half-width in sizes:
+/// plate 200 times the cone's size (the second and third) and by wider ones (the first and the
+/// fourth, on plates 2,000 times their size), with each case's plate half-width in sizes:
 /// - rapier's contact normal for the cone read (-0.69, 0.19, -0.69) on the plate's top face
 ///   (parry's `f32` query on the whole box), the push along it was no measure, and the cone was
 ///   left 2.8 thicknesses in; the guard now pushes along parry's normal on the plate's part
-///   near the cone (`geometry::contact_near`);
+///   near the cone (`geometry::contact_near`). So is the fourth, which entered the plate 1.6
+///   thicknesses deep on its first step, before rapier held any contact (or normal) for it;
 /// - the push out asked parry of the whole plate, which read the first cone apart while it was
 ///   1.9 m in (3.6 thicknesses in the end); it asks the near part now.
-const ON_LARGE_PLATES: [(Case, f32); 3] = [
+const ON_LARGE_PLATES: [(Case, f32); 4] = [
     (
         (
             2,
@@ -313,6 +314,17 @@ const ON_LARGE_PLATES: [(Case, f32); 3] = [
             [0.621_389_5, -0.677_839_6, 0.064_231_61, 0.387_663_54],
         ),
         100.0,
+    ),
+    (
+        (
+            2,
+            0.417_755_42,
+            0.021_153_1,
+            [13.271_688, -2.004_069, -8.903_769],
+            [-0.567_073_8, 9.343_737, 9.848_53],
+            [-0.240_034_62, 0.061_242_06, 0.415_679_5, 0.875_124_75],
+        ),
+        1000.0,
     ),
 ];
 
