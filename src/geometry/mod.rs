@@ -31,6 +31,7 @@ pub use motion::RigidMotion;
 pub(crate) use motion::GRAZING;
 pub use reconstruction::{ReconstructionError, ReconstructionOptions, Reconstructor};
 pub(crate) use shape_cast::contact_near;
+pub(crate) use shapes::shape_reach;
 pub use surface_bvh::{NearCache, SurfaceBvh};
 pub use surface_contact::{
     tool_surface_contacts, tool_surface_contacts_with_rings, triangles_in, SurfaceContact,

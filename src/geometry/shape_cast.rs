@@ -16,6 +16,7 @@ use super::contact::{
 };
 use super::motion::RigidMotion;
 use super::reconstruction::{ReconstructionError, Reconstructor};
+use super::shapes::shape_reach;
 use crate::math::{Pose, Real, Vector};
 use pair_query::{near_part, Advance, PairQuery};
 use parry3d::shape::Shape;
@@ -108,9 +109,7 @@ impl Reconstructor {
             (c0.as_vec3(), c1.as_vec3()),
             reach as Real,
         );
-        let near_query = near
-            .as_ref()
-            .map(|part| q.cut_to(part, moving, self.options.tolerance, places));
+        let near_query = near.as_ref().map(|part| q.cut_to(part));
         let walk = near_query.as_ref().unwrap_or(&q);
         let end = motion.end;
         let d = end.translation - motion.start.translation;
@@ -223,8 +222,7 @@ pub(crate) fn contact_near(
     if !(pos_fixed.is_finite() && pos_moving.is_finite() && prediction.is_finite()) {
         return None;
     }
-    let sphere = moving.compute_local_bounding_sphere();
-    let reach = sphere.radius + sphere.center.length();
+    let reach = shape_reach(moving);
     let places = [pos_moving.translation; 2];
     let tolerance = super::ReconstructionOptions::default().tolerance;
     let q = PairQuery::new(fixed, pos_fixed, moving, tolerance, places);
@@ -234,9 +232,7 @@ pub(crate) fn contact_near(
     let part =
         near_part(fixed, pos_fixed, (places[0], places[1]), reach).filter(|_| prediction <= reach);
     match &part {
-        Some(part) => q
-            .cut_to(part, moving, tolerance, places)
-            .contact_within(pos_moving, prediction),
+        Some(part) => q.cut_to(part).contact_within(pos_moving, prediction),
         None => q.contact_within(pos_moving, prediction),
     }
 }
@@ -294,8 +290,7 @@ impl Reconstructor {
             fixed.compute_local_bounding_sphere().radius,
             moving.compute_local_bounding_sphere().radius,
         );
-        let sphere = moving.compute_local_bounding_sphere();
-        let reach_m = sphere.radius + sphere.center.length();
+        let reach_m = shape_reach(moving);
         let q = PairQuery::new(
             fixed,
             pos_fixed,
@@ -322,9 +317,7 @@ impl Reconstructor {
             // `moving` stays within `reach_m` of its origin's segment).
             let places = [pose_at(0.0).translation, pos_moving.translation];
             let near = near_part(fixed, pos_fixed, (places[0], places[1]), reach_m);
-            let near_query = near
-                .as_ref()
-                .map(|part| q.cut_to(part, moving, self.options.tolerance, places));
+            let near_query = near.as_ref().map(|part| q.cut_to(part));
             let q = near_query.as_ref().unwrap_or(&q);
             let s = match q.advance(pose_at, reach, None, 1.0) {
                 Advance::Unsupported => return Ok(None),

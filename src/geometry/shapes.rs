@@ -229,6 +229,14 @@ fn rounded(inner: MeshBuffers, radius: Real) -> Result<MeshBuffers, TouchMeshErr
     hull(&points)
 }
 
+/// How far a point of `shape` can be from the shape's origin: the distance to its bounding
+/// sphere's centre plus the sphere's radius (the centre of a convex hull's sphere is not its
+/// origin).
+pub(crate) fn shape_reach(shape: &dyn Shape) -> Real {
+    let sphere = shape.compute_local_bounding_sphere();
+    sphere.center.length() + sphere.radius
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

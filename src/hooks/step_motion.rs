@@ -10,13 +10,7 @@ use parry3d::utils::hashmap::HashMap;
 use rapier3d::dynamics::{RigidBodyHandle, RigidBodySet};
 use rapier3d::geometry::{ColliderHandle, ColliderSet};
 
-/// How far a point of `shape` can be from the shape's origin: the distance to its bounding
-/// sphere's centre plus the sphere's radius (the centre of a convex hull's sphere is not its
-/// origin).
-pub(crate) fn shape_reach(shape: &dyn parry3d::shape::Shape) -> crate::math::Real {
-    let sphere = shape.compute_local_bounding_sphere();
-    sphere.center.length() + sphere.radius
-}
+pub(crate) use crate::geometry::shape_reach;
 
 /// How far a point of collider `co` (handle `h`) can be from its body's origin: the offset to
 /// its parent plus its shape's reach (a turn by `θ` moves it by at most `θ` times this). The

@@ -184,16 +184,14 @@ impl<'a> PairQuery<'a> {
         }
     }
 
-    /// The same query on `part` of the fixed shape ([`near_part`]), with this one's
-    /// tolerances.
-    pub(super) fn cut_to<'b>(
-        &self,
-        part: &'b (Cuboid, Pose),
-        moving: &'b dyn Shape,
-        tolerance: Real,
-        places: [Vector; 2],
-    ) -> PairQuery<'b> {
-        let mut q = PairQuery::new(&part.0, &part.1, moving, tolerance, places);
+    /// The same query on `part` of the fixed shape ([`near_part`]), with this one's moving
+    /// shape and tolerances.
+    pub(super) fn cut_to<'b>(&self, part: &'b (Cuboid, Pose)) -> PairQuery<'b>
+    where
+        'a: 'b,
+    {
+        // (The relative tolerance and the places only set `tol` and `touch`, replaced here.)
+        let mut q = PairQuery::new(&part.0, &part.1, self.moving, 1e-6, [part.1.translation; 2]);
         (q.tol, q.touch) = (self.tol, self.touch);
         q
     }

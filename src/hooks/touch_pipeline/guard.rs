@@ -388,7 +388,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         }
                         // parry's contact normal at the pose now, on a huge box's part near
                         // the mover (`geometry::contact_near`), against a still convex partner.
-                        let near_normal = |partner_dynamic: bool| {
+                        let near_normal = || {
                             (!partner_dynamic && partner.shape().is_convex())
                                 .then(|| {
                                     contact_near(
@@ -553,7 +553,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 // (rapier holds no normal for a pair it found apart when the
                                 // step began: parry's at the pose now, as below.)
                                 rapier_normal(world, ph, ch)
-                                    .or_else(|| near_normal(partner_dynamic))
+                                    .or_else(near_normal)
                                     .and_then(push_out)
                             };
                             let blocked_at_start = blocked_at_start || graze_normal.is_some();
@@ -610,7 +610,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // A cone sliding on a plate 200 times its size was left 2.8 plate
                         // thicknesses in, its push along rapier's normal 0.6 m long.
                         let along_normal = match along_normal {
-                            Some(c) if c.depth > deepest_possible => near_normal(partner_dynamic)
+                            Some(c) if c.depth > deepest_possible => near_normal()
                                 .and_then(push_out)
                                 .filter(|c| c.depth <= deepest_possible)
                                 .or(Some(c)),
