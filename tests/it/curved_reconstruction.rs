@@ -291,3 +291,60 @@ proptest! {
         prop_assert!(!c.needs_correction());
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// A curved shape (every kind of `curved`), turned any way, sunk 0.01 % to 3 % of its size
+    /// into the top of a box 1 to 1000 times its size placed off the origin, at 1e-4 to 1e4 m,
+    /// pushed out along the box's up: the way out is the depth of the shape's lowest point under
+    /// the top (its support point, computed here), and the push leaves that point on the top,
+    /// not lifted off. Within 1e-4 of the size and two `f32` steps of the box's coordinates (the
+    /// inputs' own rounding). The advance that measures the way out stops within its touch band
+    /// (ten such steps of the coordinates: 2.7 mm on rapier's 200 m CCD floor): the band was
+    /// counted in the depth, and every push lifted the shape off the box by up to that much.
+    #[test]
+    fn a_push_out_of_a_huge_box_leaves_the_shape_touching_it(
+        kind in 0u8..6,
+        log_scale in -4.0f32..4.0,
+        log_size in 0.3f32..3.0,
+        log_depth in -4.0f32..-1.5,
+        turn in (-3.0f32..3.0, -3.0f32..3.0, -3.0f32..3.0),
+        off in (-0.4f32..0.4, -0.4f32..0.4),
+    ) {
+        let s = 10f32.powf(log_scale);
+        let shape = curved(kind, s);
+        let half = 10f32.powf(log_size) * s;
+        let plate = Cuboid::new(Vector::new(half, 0.1 * half, half));
+        let plate_pose = Pose::from_translation(Vector::new(0.3 * half, -0.1 * half, -0.2 * half));
+        let rot = Rotation::from_scaled_axis(Vector::new(turn.0, turn.1, turn.2));
+        let depth = 10f32.powf(log_depth) * s;
+        let sm = shape.as_support_map().expect("a support map");
+        let low = sm.support_point_toward(&Pose::from_rotation(rot), -Vector::Y).y;
+        let at = Vector::new(0.3 * half + off.0 * half, -low - depth, -0.2 * half + off.1 * half);
+        let now = Pose::from_parts(at, rot);
+        let c = Reconstructor::default()
+            .push_out_shapes(&plate, &plate_pose, shape.as_ref(), &now, Vector::Y)
+            .unwrap()
+            .expect("a way out");
+        // The inputs' rounding: the plate's coordinates, where the shape lies.
+        let magnitude = (1.5 * half).max(at.abs().max_element());
+        let allowed = 1e-4 * s + 2.0 * 8.0 * Real::EPSILON * magnitude;
+        if c.needs_correction() {
+            prop_assert!(
+                (c.depth - depth).abs() <= allowed,
+                "way out {} for a depth {depth} (allowed {allowed})", c.depth
+            );
+            prop_assert!((c.reversing_vector - Vector::Y * c.depth).length() <= 1e-6 * c.depth);
+            // The lowest point where the push leaves the shape, against the plate's top (y = 0):
+            // above the plate's footprint, that is the gap.
+            prop_assert_eq!(c.touch_pose.rotation, rot);
+            let gap = c.touch_pose.translation.y + low;
+            prop_assert!(gap.abs() <= allowed, "left {gap} from the plate (allowed {allowed})");
+        } else {
+            // Touching: within the touch band, ten tolerances of the plate's coordinates.
+            let band = 10.0 * 8.0 * Real::EPSILON * 3.0 * half + 1e-5 * s;
+            prop_assert!(depth <= band, "{:?} at a depth {depth} (band {band})", c.state);
+        }
+    }
+}
