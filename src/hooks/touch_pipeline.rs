@@ -29,6 +29,7 @@ mod correction;
 mod guard;
 mod hook_flags;
 mod impacts;
+mod left_alone;
 mod meshes;
 mod movers;
 mod pair_view;

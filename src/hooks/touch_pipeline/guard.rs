@@ -1,15 +1,15 @@
 //! The step guard of [`TouchPipeline`]: after rapier's step, moves bodies that penetrate (or
 //! went through something) back to first touch; then the moved bodies' colliders are synced
-//! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`).
+//! (`pose_sync.rs`) and the hook flags of fast bodies kept (`hook_flags.rs`). The partners it
+//! leaves alone before measuring them are sorted out in `left_alone.rs`.
 
 use super::articulations::{articulated, same_articulation};
 use super::correction::{apply_correction, normal_toward_mover, undone_almost_whole};
-use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, stayed_apart, SlowPair};
-use super::pair_view::{
-    push_out, resting_within, safe_step, slow_pair_calm, Mover, PairStates, PairView,
-};
+use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, SlowPair};
+use super::left_alone::Screen;
+use super::pair_view::{push_out, resting_within, safe_step, slow_pair_calm, Mover, PairView};
 use super::pose_sync::sync_moved_colliders;
-use super::rapier_contacts::{collider_pose_now, other_of, rapier_normal, resting_slop};
+use super::rapier_contacts::{rapier_normal, resting_slop};
 use super::swept::{swept_partners, StillPartners};
 use super::swept_calm::stayed_within_slop;
 use super::*;
@@ -82,11 +82,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let Some(co) = world.colliders.get(ch) else {
                         continue;
                     };
-                    // A pair with a curved shape (a tessellated touch mesh) is measured on the
-                    // shapes themselves.
-                    let curved_with = |ph: ColliderHandle| {
-                        !(mesh_exact && self.hooks.meshes.get(&ph).is_some_and(|m| m.exact))
-                    };
                     let co_rel = co.position_wrt_parent().copied();
                     let pose_now = co_rel.map_or(*co.position(), |rel| body_pose * rel);
                     let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
@@ -101,127 +96,30 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     // found by neither (no rapier pair, neither fast) and ended 15.5 mm deep.
                     let fast_at = if rewind { 0.5 * prediction } else { prediction };
                     let fast = d.length() + turn >= mesh.min_extent().min(fast_at);
-                    // A dynamic partner that moved less than the pair's safe step relative to
-                    // this body is left to rapier's solver (below) whatever its contact points
-                    // say, decided before they are read (rapier's points of every pair in a
-                    // pile were most of the guard's time); so is one with no touch mesh.
-                    // Except a fresh impact (`TouchOptions::rewind_dynamic_impacts`): a pair
-                    // rapier held no contact point for when the step began (farther apart than
-                    // its prediction distance, so its solver never saw them) that closed by
-                    // more than that and the slop. It cannot have passed through, but it can
-                    // end deep: a ragdoll's forearm, struck by the pile above, went 126 mm
-                    // into its torso within one step. Such a pair is let go here only when it
-                    // surely stayed apart (`impacts::stayed_apart`). A pair rapier held only
-                    // speculative points for (within its prediction distance, apart) is
-                    // rapier's too: its soft contact can leave it deep (a ball closing on a box
-                    // at 6 m/s from 6 mm away, 6.3 mm into it), but rewinding such pairs made
-                    // the stress scenes' piles much worse (README).
-                    let left_to_rapier =
-                        |ph: ColliderHandle,
-                         partner: &rapier3d::geometry::Collider,
-                         pair: Option<&rapier3d::geometry::ContactPair>,
-                         states: &PairStates| {
-                            let dynamic = partner
-                                .parent()
-                                .and_then(|pb| world.bodies.get(pb))
-                                .is_some_and(|b| b.is_dynamic());
-                            if !dynamic && !articulated {
-                                return false;
-                            }
-                            let Some(pm) = self.hooks.meshes.get(&ph) else {
-                                return true;
-                            };
-                            let dp = body_motion(
-                                &self.hooks.prev_poses,
-                                &world.bodies,
-                                partner.parent(),
-                            );
-                            let relative = (d - dp).length();
-                            if relative >= safe_step(&mesh, &pm.mesh) {
-                                return false;
-                            }
-                            if !dynamic {
-                                // A link of an articulation within its safe step (below).
-                                return true;
-                            }
-                            if !self.options.rewind_dynamic_impacts
-                                || relative + turn <= prediction + slop
-                            {
-                                return true;
-                            }
-                            // (A swept partner's pair is looked up only here: most are let go
-                            // above.)
-                            let had_points = pair
-                                .or_else(|| world.narrow_phase.contact_pair(ch, ph))
-                                .is_some_and(|p| {
-                                    p.manifolds().iter().any(|m| !m.points.is_empty())
-                                });
-                            if had_points {
-                                return true;
-                            }
-                            stayed_apart(
-                                (world, &self.hooks.meshes, &self.hooks.prev_poses, states),
-                                (ch, &mesh, &pose_now, mesh_exact),
-                                (ph, partner),
-                                relative + turn,
-                                (prediction, slop),
-                            )
-                        };
-                    let mover = Mover {
-                        collider: co,
-                        mesh: &mesh,
-                        exact: mesh_exact,
-                        pose: pose_now,
-                        prev_pose,
-                        motion: d,
-                        turn,
+                    // The partners the guard leaves alone before measuring them, and how it
+                    // reads the others (`left_alone.rs`).
+                    let screen = Screen {
+                        world,
+                        meshes: &self.hooks.meshes,
+                        prev_poses: &self.hooks.prev_poses,
+                        options: &self.options,
+                        ch,
+                        mover: Mover {
+                            collider: co,
+                            mesh: &mesh,
+                            exact: mesh_exact,
+                            pose: pose_now,
+                            prev_pose,
+                            motion: d,
+                            turn,
+                        },
+                        articulated,
+                        prediction,
+                        slop,
                     };
+                    let reach = self.hooks.meshes.get(&ch).map_or(0.0, |m| m.reach);
                     // Tools (kinematic) may have no narrow-phase pairs with fixed colliders
                     // (rapier's default collision types): always query them.
-                    let read =
-                        |ph: ColliderHandle,
-                         partner: &rapier3d::geometry::Collider,
-                         pair: Option<&rapier3d::geometry::ContactPair>| {
-                            PairView::read(
-                                world,
-                                (&self.hooks.meshes, &self.hooks.prev_poses),
-                                &mover,
-                                (ph, partner, pair),
-                                curved_with(ph),
-                                (slop, prediction),
-                            )
-                        };
-                    // A pair with a fixed partner that rapier holds no point for, and whose
-                    // kept state ([`PairState`]) still bounds it within the slop (a body
-                    // falling toward a floor, once measured apart), is calm: neither read nor
-                    // measured (70 pairs a step on rapier's TriMesh-floor stress scene). Not
-                    // past the pair's safe step: the state bounds the overlap, not a passage
-                    // through a thin partner.
-                    let reach = self.hooks.meshes.get(&ch).map_or(0.0, |m| m.reach);
-                    let kept_apart = |ph: ColliderHandle,
-                                      partner: &rapier3d::geometry::Collider,
-                                      pair: Option<&rapier3d::geometry::ContactPair>,
-                                      states: &PairStates| {
-                        !self.options.report_touching
-                            && partner
-                                .parent()
-                                .and_then(|pb| world.bodies.get(pb))
-                                .is_none_or(|b| b.is_fixed())
-                            && pair
-                                .is_none_or(|p| p.manifolds().iter().all(|m| m.points.is_empty()))
-                            && self
-                                .hooks
-                                .meshes
-                                .get(&ph)
-                                .is_some_and(|pm| d.length() + turn < safe_step(&mesh, &pm.mesh))
-                            && states.get(&(ch, ph)).is_some_and(|st| {
-                                st.bound(
-                                    &pose_now,
-                                    &collider_pose_now(&world.bodies, partner),
-                                    reach,
-                                ) <= slop
-                            })
-                    };
                     let partners: Vec<(ColliderHandle, Option<PairView>)> =
                         if fast || pass > 0 || is_tool {
                             // In the first pass, a dynamic body whose dynamic partners are
@@ -238,40 +136,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 .map(|h| (h, None))
                                 .collect()
                         } else {
-                            // A slow body: only rapier's pairs, and among them only those its
-                            // own contact points (re-read at the poses now) do not show calm.
-                            // A body that moved less than half the slop changes a pair's depth
-                            // by less than the slop unless its partner moved too: a fixed
-                            // partner did not, and a dynamic one that did checks the pair from
-                            // its side.
-                            let still =
-                                !self.options.report_touching && d.length() + turn <= 0.5 * slop;
-                            let mut restless = Vec::new();
-                            for p in world.narrow_phase.contact_pairs_with(ch) {
-                                let ph = other_of(p, ch);
-                                let Some(partner) = world.colliders.get(ph) else {
-                                    continue;
-                                };
-                                if still
-                                    && partner
-                                        .parent()
-                                        .and_then(|pb| world.bodies.get(pb))
-                                        .is_none_or(|b| !b.is_kinematic())
-                                {
-                                    continue;
-                                }
-                                if left_to_rapier(ph, partner, Some(p), &self.pair_states) {
-                                    continue;
-                                }
-                                if kept_apart(ph, partner, Some(p), &self.pair_states) {
-                                    continue;
-                                }
-                                let view = read(ph, partner, Some(p));
-                                if !view.calm(&self.options) {
-                                    restless.push((ph, Some(view)));
-                                }
-                            }
-                            restless
+                            screen
+                                .restless_pairs(&self.pair_states)
+                                .into_iter()
+                                .map(|(h, view)| (h, Some(view)))
+                                .collect()
                         };
                     for (ph, view) in partners {
                         let Some(partner) = world.colliders.get(ph) else {
@@ -281,7 +150,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             continue;
                         }
                         // (Most of a pile's swept partners; a slow body's were left out above.)
-                        if view.is_none() && left_to_rapier(ph, partner, None, &self.pair_states) {
+                        if view.is_none()
+                            && screen.left_to_rapier(ph, partner, None, &self.pair_states)
+                        {
                             continue;
                         }
                         // Only pairs rapier itself would solve (sensors, groups, disabled
@@ -291,7 +162,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // few, a floor's are every body on it (scanning the floor's was a
                         // twelfth of the guard on the TriMesh-floor stress scene).
                         let rapier_pair = world.narrow_phase.contact_pair(ch, ph);
-                        if view.is_none() && kept_apart(ph, partner, rapier_pair, &self.pair_states)
+                        if view.is_none()
+                            && screen.kept_apart(ph, partner, rapier_pair, &self.pair_states)
                         {
                             continue;
                         }
@@ -312,7 +184,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             continue;
                         };
                         let partner_body = partner.parent();
-                        let curved = curved_with(ph);
+                        let curved = screen.curved_with(ph);
                         // A pair rapier's manifold shows overlapping when the step began is a
                         // resting contact rapier is resolving: no first touch on this step's
                         // path. Pairs of two dynamic bodies (a stack) are rapier's; against a
@@ -327,7 +199,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             trusted,
                             corner_reach,
                             partner_dynamic,
-                        } = view.unwrap_or_else(|| read(ph, partner, rapier_pair));
+                        } = view.unwrap_or_else(|| screen.read(ph, partner, rapier_pair));
                         let overlapped = rapier.is_some_and(|r| r.in_contact_at_start);
                         let safe = safe_step(&mesh, &partner_mesh);
                         let may_tunnel = (d - dp).length() >= safe;
