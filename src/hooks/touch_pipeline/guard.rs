@@ -87,8 +87,8 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     let prev_pose = previous_collider_pose(&self.hooks.prev_poses, co, pose_now);
                     // How far a point of the collider may have travelled: translation plus the
                     // arc of its rotation.
-                    let turn = prev_pose.rotation.angle_between(pose_now.rotation)
-                        * collider_reach(&self.hooks.meshes, ch, co);
+                    let arm = collider_reach(&self.hooks.meshes, ch, co);
+                    let turn = prev_pose.rotation.angle_between(pose_now.rotation) * arm;
                     // A body that moved less than rapier's prediction distance met nothing that
                     // stood still without rapier seeing it coming. With the rewind on, one that
                     // moved half of it may have met a partner that closed the other half: two
@@ -112,6 +112,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             prev_pose,
                             motion: d,
                             turn,
+                            arm,
                         },
                         articulated,
                         prediction,
@@ -199,6 +200,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             trusted,
                             corner_reach,
                             partner_dynamic,
+                            turned_since_update,
                         } = view.unwrap_or_else(|| screen.read(ph, partner, rapier_pair));
                         let overlapped = rapier.is_some_and(|r| r.in_contact_at_start);
                         let safe = safe_step(&mesh, &partner_mesh);
@@ -473,8 +475,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // showed when the step began) is a measure gone wrong, not a motion to
                         // undo. (An open, bumpy TriMesh floor gave a way out 3.8 m long for a
                         // cube that had moved 5 mm; the push put it inside a ball.)
+                        // (On a manifold rapier recycled since a turn, the depth when the
+                        // step began is not known: rapier's points re-read now and what the
+                        // turn may have brought past them bound it instead.)
+                        let recycled_bound = rapier
+                            .filter(|_| turned_since_update)
+                            .map_or(0.0, |r| r.depth + corner_reach + resting_slop);
                         let deepest_possible =
-                            travel + resting.map_or(0.0, |r| r.depth_at_start) + resting_slop;
+                            (travel + resting.map_or(0.0, |r| r.depth_at_start) + resting_slop)
+                                .max(recycled_bound);
                         // A push along rapier's normal that is no measure may be along a wrong
                         // normal (rapier's, against a box far larger than the mover, can be
                         // tens of degrees off): pushed along parry's at the pose now instead,

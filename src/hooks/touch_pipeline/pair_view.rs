@@ -6,6 +6,7 @@ use super::rapier_contacts::{collider_pose_now, rapier_contact_of, RapierContact
 use super::*;
 use crate::geometry::{apart_from_mesh, contact_near, ContactConfiguration};
 use crate::hooks::step_motion::point_travel;
+use crate::math::Rotation;
 
 /// The overlap of a pair when it was last measured, and the mover's collider pose relative
 /// to the partner's then.
@@ -86,6 +87,10 @@ pub(super) struct PairView {
     /// capsule, a polyhedron that did not turn).
     pub corner_reach: Real,
     pub partner_dynamic: bool,
+    /// rapier's manifold was computed before the step, and the mover has turned since
+    /// (`RapierContact::rotation_at_update`): its points and its depth when the step began
+    /// miss what the turn brought down, and only `corner_reach` bounds it.
+    pub turned_since_update: bool,
 }
 
 impl PairView {
@@ -121,6 +126,8 @@ pub(super) struct Mover<'a> {
     pub motion: Vector,
     /// The arc its rotation over the step moves its farthest point along.
     pub turn: Real,
+    /// How far its farthest point lies from its centre (`turn` per radian).
+    pub arm: Real,
 }
 
 /// A shape turns no new corner into a contact if it has none (a ball, a capsule) or did not
@@ -163,7 +170,14 @@ impl PairView {
                 p,
                 ph,
                 (&partner_pose, &partner_prev),
-                (&mover.pose, &mover.prev_pose),
+                (
+                    &mover.pose,
+                    &mover.prev_pose,
+                    mover
+                        .collider
+                        .position_wrt_parent()
+                        .map_or(Rotation::IDENTITY, |p| p.rotation),
+                ),
                 slop,
             )
         });
@@ -191,6 +205,18 @@ impl PairView {
                 None => r.depth = Real::INFINITY,
             }
         }
+        // A manifold rapier recycled since a turn (`RapierContact::rotation_at_update`): the
+        // turn from then on may have brought corners down that it does not hold.
+        let update_pose = rapier
+            .and_then(|r| r.rotation_at_update)
+            .map_or(mover.prev_pose, |q| {
+                Pose::from_parts(mover.prev_pose.translation, q)
+            });
+        let turned_before =
+            update_pose.rotation.angle_between(mover.prev_pose.rotation) * mover.arm;
+        let turned_since_update = turned_before > 0.1 * slop;
+        let smooth =
+            smooth && (!turned_since_update || no_new_corner(mover.collider, mover.exact, true));
         PairView {
             partner_pose,
             dp,
@@ -209,7 +235,7 @@ impl PairView {
                     let reach = corner_reach(
                         mover.mesh,
                         r.deepest_at_start,
-                        (&mover.pose, &mover.prev_pose),
+                        (&mover.pose, &update_pose),
                         (&partner_pose, &partner_prev),
                         r.normal,
                         partner_turn,
@@ -233,6 +259,7 @@ impl PairView {
                 .parent()
                 .and_then(|pb| world.bodies.get(pb))
                 .is_some_and(|b| b.is_dynamic()),
+            turned_since_update,
         }
     }
 }
@@ -243,6 +270,10 @@ impl PairView {
 /// its normal when the step began, and a turn brings other corners down: an L-shaped TriMesh
 /// rocking on a TriMesh floor read 8 µm above it at rapier's points and ended its step with
 /// another corner 1.12 mm in.
+///
+/// `prev_pose` is the mover's pose when rapier computed the manifold: the step's start, or for
+/// a manifold rapier recycled since, the rotation it shows it was computed at
+/// (`RapierContact::rotation_at_update`).
 ///
 /// In the partner's frame the mover turned from `R0` to `R1`: a mover point `u` got deeper
 /// than the point `a` deepest at the start by `(a - u) · m`, `m = R1ᵀ n - R0ᵀ n` (the

@@ -3,6 +3,7 @@
 //! body resting on something fixed may sit (the pile rule).
 
 use super::*;
+use crate::math::{Matrix, Rotation};
 
 /// Whether collider `c` has a contact with a fixed or kinematic collider in rapier's narrow
 /// phase (a body resting on the floor).
@@ -124,6 +125,13 @@ pub(super) struct RapierContact {
     pub(super) in_contact_at_start: bool,
     /// The point deepest when the step began, on the mover, local to its collider.
     pub(super) deepest_at_start: Vector,
+    /// The mover collider's rotation at the narrow-phase update that computed the manifolds,
+    /// where the manifolds show it ([`body_rotation_at_update`]); `None` where they do not.
+    /// rapier recycles a pair's manifolds while the pair moves little (up to 5 cm and about
+    /// 11° at its defaults), and a turn since the update brings corners down that they do not
+    /// hold: a 46 cm box settling across a tile seam, 4° of tilt after its manifold was
+    /// computed, read 0.5 mm apart at rapier's points with an edge 1.47 mm in.
+    pub(super) rotation_at_update: Option<Rotation>,
 }
 
 /// The [`RapierContact`] of `pair`, `None` when rapier's manifolds hold no contact point for
@@ -132,7 +140,7 @@ pub(super) fn rapier_contact_of(
     pair: &rapier3d::geometry::ContactPair,
     partner: ColliderHandle,
     (partner_pose, partner_prev): (&Pose, &Pose),
-    (mover_pose, mover_prev): (&Pose, &Pose),
+    (mover_pose, mover_prev, mover_offset): (&Pose, &Pose, Rotation),
     touch: Real,
 ) -> Option<RapierContact> {
     let partner_first = pair.collider1 == partner;
@@ -142,6 +150,7 @@ pub(super) fn rapier_contact_of(
         ((mover_pose, mover_prev), (partner_pose, partner_prev))
     };
     let mut in_contact_at_start = false;
+    let mut rotation_at_update: Option<Rotation> = None;
     let mut deepest: Option<(Real, Vector)> = None;
     // The deepest overlap when the step began and the mover's point there.
     let mut deepest_at_start: Option<(Real, Vector)> = None;
@@ -157,6 +166,10 @@ pub(super) fn rapier_contact_of(
         };
         let (w1, w2, n1) = frames(pos1, pos2);
         let (v1, v2, m1) = frames(prev1, prev2);
+        if rotation_at_update.is_none() {
+            rotation_at_update =
+                body_rotation_at_update(m, !partner_first).map(|r| r * mover_offset);
+        }
         for p in &m.points {
             // Signed distances along collider 1's normal.
             let before = (v2.transform_point(p.local_p2) - v1.transform_point(p.local_p1)).dot(m1);
@@ -186,7 +199,71 @@ pub(super) fn rapier_contact_of(
         normal,
         in_contact_at_start,
         deepest_at_start: deepest_at_start.map_or(Vector::ZERO, |(_, p)| p),
+        rotation_at_update,
     })
+}
+
+/// The rotation of body `first` (collider 1's when `true`, else collider 2's) of manifold `m`
+/// at rapier's last full update of the manifold, from its solver contacts; `None` where fewer
+/// than two of them hold an arm of this side in the body's frame, or their arms are nearly
+/// parallel.
+///
+/// At a full update rapier keeps each solver contact's lever arm in world space
+/// (`ContactData::solver_dp1`, `solver_dp2`: from the body's centre of mass to the midpoint of
+/// the contact's two anchors) and its anchor in the body's frame (`SolverContact::anchor1`,
+/// `anchor2`), and keeps both while it recycles the pair. The body's rotation then carried
+/// each anchor onto its arm (less half the contact's distance along the normal: the arm ends
+/// at the midpoint); two anchors that are not parallel fix that rotation (the TRIAD method).
+/// rapier keeps a dominant side's anchors (a fixed body's) in world space: `None` for those.
+fn body_rotation_at_update(
+    m: &rapier3d::geometry::ContactManifold,
+    first: bool,
+) -> Option<Rotation> {
+    let data = &m.data;
+    let local = if first {
+        data.rigid_body1.is_some() && data.relative_dominance <= 0
+    } else {
+        data.rigid_body2.is_some() && data.relative_dominance >= 0
+    };
+    if !local {
+        return None;
+    }
+    // (body frame, world) pairs of anchor and arm.
+    let pairs = || {
+        data.solver_contacts.iter().filter_map(|sc| {
+            let [id] = sc.contact_indices();
+            let point = m.points.get(id as usize)?;
+            let (anchor, arm) = if first {
+                (sc.anchor1, point.data.solver_dp1)
+            } else {
+                (sc.anchor2, point.data.solver_dp2)
+            };
+            // The arm runs to the midpoint of the anchors: body 2's anchor lies half the
+            // contact's distance beyond it along the normal, body 1's as far short of it.
+            let half = 0.5 * sc.dist * data.normal;
+            let arm = if first { arm - half } else { arm + half };
+            (anchor.is_finite() && arm.is_finite()).then_some((anchor, arm))
+        })
+    };
+    let (u1, w1) = pairs().max_by(|a, b| a.0.length_squared().total_cmp(&b.0.length_squared()))?;
+    let (u2, w2) = pairs().max_by(|a, b| {
+        u1.cross(a.0)
+            .length_squared()
+            .total_cmp(&u1.cross(b.0).length_squared())
+    })?;
+    // Well apart: the sine between the two anchors at least a tenth.
+    let (c, l) = (u1.cross(u2).length(), u1.length() * u2.length());
+    if !(c > 0.1 * l && w1.cross(w2).length() > 0.1 * w1.length() * w2.length()) {
+        return None;
+    }
+    let triad = |a: Vector, b: Vector| {
+        let x = a.normalize();
+        let y = a.cross(b).normalize();
+        Matrix::from_cols(x, y, x.cross(y))
+    };
+    let r = triad(w1, w2) * triad(u1, u2).transpose();
+    let q = Rotation::from_mat3(&r).normalize();
+    q.is_finite().then_some(q)
 }
 
 /// rapier's contact normal for the pair (from its deepest contact), oriented out of `fixed`
@@ -202,4 +279,79 @@ pub(super) fn rapier_normal(
     let n = manifold.data.normal;
     let n = if pair.collider1 == fixed { n } else { -n };
     n.try_normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rapier3d::dynamics::RigidBodyBuilder;
+    use rapier3d::geometry::ColliderBuilder;
+
+    /// A box resting on a frictionless floor, spinning about the vertical at 0.03 rad a step:
+    /// rapier computes its manifold at the first step (at the tilt it was placed at) and
+    /// recycles it at the second (the spin moved the pair's points up to 21 mm, under rapier's
+    /// 5 cm). The
+    /// rotation the manifold shows after each step is the tilt it was placed at (set here),
+    /// within 1e-4 rad, not the box's rotation when the second step began, 0.03 rad from it.
+    /// Placed again, turned 0.3 rad about the vertical (past rapier's 11°), rapier computes the
+    /// manifold again, and it shows the new placement.
+    #[test]
+    fn a_recycled_manifold_shows_the_rotation_it_was_computed_at() {
+        let mut world = PhysicsWorld {
+            gravity: Vector::ZERO,
+            ..Default::default()
+        };
+        let floor = world.insert_collider(
+            ColliderBuilder::cuboid(0.5, 0.1, 0.5)
+                .translation(Vector::new(0.2, -0.1, -0.1))
+                .friction(0.0),
+            None,
+        );
+        let body = world.insert_body(RigidBodyBuilder::dynamic());
+        let co = world.insert_collider(
+            ColliderBuilder::cuboid(0.3, 0.2, 0.25).friction(0.0),
+            Some(body),
+        );
+        let spin = 0.03 / world.integration_parameters.dt;
+        // The box at `tilt`, its lowest corner 0.5 mm into the floor's top (y = 0), spinning.
+        let place = |world: &mut PhysicsWorld, tilt: Rotation| {
+            let low = world.colliders[co]
+                .shape()
+                .compute_aabb(&Pose::from_rotation(tilt))
+                .mins
+                .y;
+            let b = &mut world.bodies[body];
+            b.set_position(
+                Pose::from_parts(Vector::new(0.1, -low - 5e-4, 0.05), tilt),
+                true,
+            );
+            b.set_linvel(Vector::ZERO, true);
+            b.set_angvel(Vector::Y * spin, true);
+        };
+        let read = |world: &PhysicsWorld| {
+            let pair = world.narrow_phase.contact_pair(co, floor).expect("a pair");
+            let first = pair.collider1 == co;
+            pair.manifolds()
+                .iter()
+                .find_map(|m| body_rotation_at_update(m, first))
+                .expect("a rotation")
+        };
+        let tilt0 = Rotation::from_axis_angle(Vector::new(1.0, 0.0, 0.3).normalize(), 0.02);
+        place(&mut world, tilt0);
+        world.step();
+        assert!(read(&world).angle_between(tilt0) < 1e-4);
+        let before = *world.bodies[body].rotation();
+        assert!(before.angle_between(tilt0) > 0.025, "the box spun");
+        world.step();
+        let at_update = read(&world);
+        assert!(
+            at_update.angle_between(tilt0) < 1e-4,
+            "{} rad from the tilt the manifold was computed at",
+            at_update.angle_between(tilt0)
+        );
+        let tilt1 = Rotation::from_rotation_y(0.3) * tilt0;
+        place(&mut world, tilt1);
+        world.step();
+        assert!(read(&world).angle_between(tilt1) < 1e-4);
+    }
 }
