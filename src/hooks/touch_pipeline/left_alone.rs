@@ -31,6 +31,14 @@ impl Screen<'_> {
         !(self.mover.exact && self.meshes.get(&ph).is_some_and(|m| m.exact))
     }
 
+    /// The body `partner` is attached to, if any.
+    fn body_of(
+        &self,
+        partner: &rapier3d::geometry::Collider,
+    ) -> Option<&rapier3d::dynamics::RigidBody> {
+        partner.parent().and_then(|pb| self.world.bodies.get(pb))
+    }
+
     /// The pair with `ph` (`partner`, rapier's contact pair `pair` when it has one) as the
     /// guard reads it ([`PairView::read`]).
     pub(super) fn read(
@@ -71,10 +79,7 @@ impl Screen<'_> {
         states: &PairStates,
     ) -> bool {
         let world = self.world;
-        let dynamic = partner
-            .parent()
-            .and_then(|pb| world.bodies.get(pb))
-            .is_some_and(|b| b.is_dynamic());
+        let dynamic = self.body_of(partner).is_some_and(|b| b.is_dynamic());
         if !dynamic && !self.articulated {
             return false;
         }
@@ -122,14 +127,10 @@ impl Screen<'_> {
         pair: Option<&rapier3d::geometry::ContactPair>,
         states: &PairStates,
     ) -> bool {
-        let world = self.world;
         let reach = self.meshes.get(&self.ch).map_or(0.0, |m| m.reach);
         let travel = self.mover.motion.length() + self.mover.turn;
         !self.options.report_touching
-            && partner
-                .parent()
-                .and_then(|pb| world.bodies.get(pb))
-                .is_none_or(|b| b.is_fixed())
+            && self.body_of(partner).is_none_or(|b| b.is_fixed())
             && pair.is_none_or(|p| p.manifolds().iter().all(|m| m.points.is_empty()))
             && self
                 .meshes
@@ -138,7 +139,7 @@ impl Screen<'_> {
             && states.get(&(self.ch, ph)).is_some_and(|st| {
                 st.bound(
                     &self.mover.pose,
-                    &collider_pose_now(&world.bodies, partner),
+                    &collider_pose_now(&self.world.bodies, partner),
                     reach,
                 ) <= self.slop
             })
@@ -158,12 +159,7 @@ impl Screen<'_> {
             let Some(partner) = world.colliders.get(ph) else {
                 continue;
             };
-            if still
-                && partner
-                    .parent()
-                    .and_then(|pb| world.bodies.get(pb))
-                    .is_none_or(|b| !b.is_kinematic())
-            {
+            if still && self.body_of(partner).is_none_or(|b| !b.is_kinematic()) {
                 continue;
             }
             if self.left_to_rapier(ph, partner, Some(p), states)
