@@ -290,9 +290,9 @@ mod tests {
     /// A box resting on a frictionless floor, spinning about the vertical at 0.03 rad a step:
     /// rapier computes its manifold at the first step (at the tilt it was placed at) and
     /// recycles it at the second (the spin moved the pair's points up to 21 mm, under rapier's
-    /// 5 cm). The
-    /// rotation the manifold shows after each step is the tilt it was placed at (set here),
-    /// within 1e-4 rad, not the box's rotation when the second step began, 0.03 rad from it.
+    /// 5 cm). The rotation the manifold shows after each step is the tilt it was placed at (set
+    /// here), within 1e-4 rad, not the box's rotation when the second step began, 0.03 rad
+    /// from it.
     /// Placed again, turned 0.3 rad about the vertical (past rapier's 11°), rapier computes the
     /// manifold again, and it shows the new placement.
     #[test]
