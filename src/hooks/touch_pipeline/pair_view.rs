@@ -2,7 +2,7 @@
 //! steps ([`PairState`]), the checks that leave a slow or a resting pair to rapier
 //! ([`slow_pair_calm`], [`resting_within`]), and the way out of an overlap ([`push_out`]).
 
-use super::rapier_contacts::{collider_pose_now, rapier_contact_of, RapierContact};
+use super::rapier_contacts::{collider_pose_now, corner_reach, rapier_contact_of, RapierContact};
 use super::*;
 use crate::geometry::{apart_from_mesh, contact_near, ContactConfiguration};
 use crate::hooks::step_motion::point_travel;
@@ -261,56 +261,6 @@ impl PairView {
                 .is_some_and(|b| b.is_dynamic()),
             turned_since_update,
         }
-    }
-}
-
-/// How much deeper than rapier's contact points, re-read now, another point of the mover may
-/// have come over the step, for a partner locally flat along rapier's normal `normal` (world,
-/// out of the partner). rapier's manifold of two polyhedra holds the features deepest along
-/// its normal when the step began, and a turn brings other corners down: an L-shaped TriMesh
-/// rocking on a TriMesh floor read 8 µm above it at rapier's points and ended its step with
-/// another corner 1.12 mm in.
-///
-/// `prev_pose` is the mover's pose when rapier computed the manifold: the step's start, or for
-/// a manifold rapier recycled since, the rotation it shows it was computed at
-/// (`RapierContact::rotation_at_update`).
-///
-/// In the partner's frame the mover turned from `R0` to `R1`: a mover point `u` got deeper
-/// than the point `a` deepest at the start by `(a - u) · m`, `m = R1ᵀ n - R0ᵀ n` (the
-/// translations cancel). The most is `a · m` less the mover's lowest vertex along `m`, one
-/// support query. A turn about the normal (a box spinning flat on a floor) gives `m = 0`.
-/// The partner's own turn is bounded by twice its arc, `partner_turn` (two of its points lie
-/// at most twice its reach apart).
-pub(super) fn corner_reach(
-    mesh: &TouchMesh,
-    a: Vector,
-    (pose_now, prev_pose): (&Pose, &Pose),
-    (partner_pose, partner_prev): (&Pose, &Pose),
-    normal: Vector,
-    partner_turn: Real,
-) -> Real {
-    let n = partner_pose.rotation.inverse() * normal;
-    let r0 = (partner_prev.inverse() * *prev_pose).rotation;
-    let r1 = (partner_pose.inverse() * *pose_now).rotation;
-    let m = r1.inverse() * n - r0.inverse() * n;
-    // The lowest vertex lies on the hull: hill climbing on a convex mesh, a pass over the
-    // hull's vertices on another (over every vertex past the hull's size limit).
-    let v = mesh.vertices();
-    let lowest = match mesh.convex_support(-m, 0) {
-        Some(i) => v[i as usize].dot(m),
-        None => match mesh.hull_vertices() {
-            Some(hull) => hull
-                .iter()
-                .map(|&i| v[i as usize].dot(m))
-                .fold(Real::INFINITY, Real::min),
-            None => v.iter().map(|p| p.dot(m)).fold(Real::INFINITY, Real::min),
-        },
-    };
-    let reach = (a.dot(m) - lowest).max(0.0) + 2.0 * partner_turn;
-    if reach.is_finite() {
-        reach
-    } else {
-        Real::INFINITY
     }
 }
 

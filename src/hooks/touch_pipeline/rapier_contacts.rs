@@ -1,6 +1,8 @@
 //! What the step guard reads from rapier's narrow phase: its contact points of a pair at the
-//! step's poses, its contact normal, whether a body rests on something fixed, and how deep a
-//! body resting on something fixed may sit (the pile rule).
+//! step's poses (and the rotation they were computed at, for a manifold rapier recycled), how
+//! far a turn may have brought the mover past them (`corner_reach`), its contact normal,
+//! whether a body rests on something fixed, and how deep a body resting on something fixed may
+//! sit (the pile rule).
 
 use super::*;
 use crate::math::{Matrix, Rotation};
@@ -264,6 +266,56 @@ fn body_rotation_at_update(
     let r = triad(w1, w2) * triad(u1, u2).transpose();
     let q = Rotation::from_mat3(&r).normalize();
     q.is_finite().then_some(q)
+}
+
+/// How much deeper than rapier's contact points, re-read now, another point of the mover may
+/// have come over the step, for a partner locally flat along rapier's normal `normal` (world,
+/// out of the partner). rapier's manifold of two polyhedra holds the features deepest along
+/// its normal when the step began, and a turn brings other corners down: an L-shaped TriMesh
+/// rocking on a TriMesh floor read 8 µm above it at rapier's points and ended its step with
+/// another corner 1.12 mm in.
+///
+/// `prev_pose` is the mover's pose when rapier computed the manifold: the step's start, or for
+/// a manifold rapier recycled since, the rotation it shows it was computed at
+/// (`RapierContact::rotation_at_update`).
+///
+/// In the partner's frame the mover turned from `R0` to `R1`: a mover point `u` got deeper
+/// than the point `a` deepest at the start by `(a - u) · m`, `m = R1ᵀ n - R0ᵀ n` (the
+/// translations cancel). The most is `a · m` less the mover's lowest vertex along `m`, one
+/// support query. A turn about the normal (a box spinning flat on a floor) gives `m = 0`.
+/// The partner's own turn is bounded by twice its arc, `partner_turn` (two of its points lie
+/// at most twice its reach apart).
+pub(super) fn corner_reach(
+    mesh: &TouchMesh,
+    a: Vector,
+    (pose_now, prev_pose): (&Pose, &Pose),
+    (partner_pose, partner_prev): (&Pose, &Pose),
+    normal: Vector,
+    partner_turn: Real,
+) -> Real {
+    let n = partner_pose.rotation.inverse() * normal;
+    let r0 = (partner_prev.inverse() * *prev_pose).rotation;
+    let r1 = (partner_pose.inverse() * *pose_now).rotation;
+    let m = r1.inverse() * n - r0.inverse() * n;
+    // The lowest vertex lies on the hull: hill climbing on a convex mesh, a pass over the
+    // hull's vertices on another (over every vertex past the hull's size limit).
+    let v = mesh.vertices();
+    let lowest = match mesh.convex_support(-m, 0) {
+        Some(i) => v[i as usize].dot(m),
+        None => match mesh.hull_vertices() {
+            Some(hull) => hull
+                .iter()
+                .map(|&i| v[i as usize].dot(m))
+                .fold(Real::INFINITY, Real::min),
+            None => v.iter().map(|p| p.dot(m)).fold(Real::INFINITY, Real::min),
+        },
+    };
+    let reach = (a.dot(m) - lowest).max(0.0) + 2.0 * partner_turn;
+    if reach.is_finite() {
+        reach
+    } else {
+        Real::INFINITY
+    }
 }
 
 /// rapier's contact normal for the pair (from its deepest contact), oriented out of `fixed`
