@@ -137,11 +137,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 .map(|h| (h, None))
                                 .collect()
                         } else {
-                            screen
-                                .restless_pairs(&self.pair_states)
-                                .into_iter()
-                                .map(|(h, view)| (h, Some(view)))
-                                .collect()
+                            screen.restless_pairs(&self.pair_states)
                         };
                     for (ph, view) in partners {
                         let Some(partner) = world.colliders.get(ph) else {

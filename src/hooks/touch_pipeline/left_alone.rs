@@ -149,7 +149,11 @@ impl Screen<'_> {
     /// own contact points (re-read at the poses now) do not show calm. A body that moved less
     /// than half the slop changes a pair's depth by less than the slop unless its partner moved
     /// too: a fixed partner did not, and a dynamic one that did checks the pair from its side.
-    pub(super) fn restless_pairs(&self, states: &PairStates) -> Vec<(ColliderHandle, PairView)> {
+    /// Each comes with its view (`Some`), as the guard's list of partners holds them.
+    pub(super) fn restless_pairs(
+        &self,
+        states: &PairStates,
+    ) -> Vec<(ColliderHandle, Option<PairView>)> {
         let world = self.world;
         let still = !self.options.report_touching
             && self.mover.motion.length() + self.mover.turn <= 0.5 * self.slop;
@@ -169,7 +173,7 @@ impl Screen<'_> {
             }
             let view = self.read(ph, partner, Some(p));
             if !view.calm(self.options) {
-                restless.push((ph, view));
+                restless.push((ph, Some(view)));
             }
         }
         restless
