@@ -42,8 +42,11 @@ impl SurfaceSet {
     /// linked again drops its old link (whose servo loop then renders nothing).
     ///
     /// The model's stiffness is the secant of the full solution between world updates (a
-    /// symmetric Broyden update along the tool's motion, negative curvature dropped): what the
-    /// next update will report, within the surface's own relaxation between updates. The
+    /// symmetric Broyden update along the tool's motion, negative curvature dropped, split into
+    /// normal and tangent parts, the normal one at least half the last: see
+    /// `normal_and_tangent`): what the next update will report, within the surface's own
+    /// relaxation between updates. The model's force is the full solution less what the held
+    /// vertices' dampers put on the tool's last move (`damper_share`). The
     /// filter's columns at the contact vertices, which the constraint solve uses, give the
     /// surface's response within one substep, dominated by the vertices' inertia (ten times
     /// stiffer than the next world update on the crate's scenes) and are not used for it.
@@ -165,6 +168,20 @@ impl SurfaceSet {
                 } else {
                     secant(&state.last, &pose, force, &shape, touched)
                 };
+            let stiffness = normal_and_tangent(&state.last, force, stiffness);
+            // The model's force: what the surfaces push with if the tool stays where it is,
+            // the full solution less what its held vertices' dampers put on its last move.
+            let resting = if force == Vector::ZERO {
+                force
+            } else {
+                let f = force - damper_share(self, world, &shape, &pose);
+                if f.is_finite() && f.dot(force) > 0.0 {
+                    f
+                } else {
+                    // The dampers carry all of it: a contact that lets go if the tool stops.
+                    force * DAMPED_OUT
+                }
+            };
             // A smooth tool's held vertices, each with its share of the normal stiffness.
             let held_vertices = match self.tools.get(&h) {
                 Some(t)
@@ -191,7 +208,7 @@ impl SurfaceSet {
             let model = ServoModel {
                 sequence: 0,
                 tool_pose: pose,
-                force,
+                force: resting,
                 stiffness,
                 grasping,
                 shape: Some(shape),
@@ -208,6 +225,83 @@ impl SurfaceSet {
         }
     }
 }
+
+/// The share of the full solution left in the model where the held vertices' dampers carry
+/// all of it (the contact stays a contact, with next to no force if the tool stays).
+const DAMPED_OUT: Real = 1e-3;
+
+/// The part of the full solution's force on a tool at `pose` that its held vertices' dampers
+/// put on it (world, N): `Σ c (v_j - v_i)` over the edges from the held vertices in its
+/// bounding box (grown by a thousandth of its size) to vertices not held, with the last
+/// step's velocities. A sharp tool's pressed points (a corner in a triangle) are left out.
+///
+/// It goes at the next update if the tool stops: a held vertex stops with the tool, and the
+/// free ones round it, which the held ones dragged through their dampers, slow down with them.
+/// A surface's implicit step meets a tool's move with its springs and, over the step, its
+/// dampers; on the 100,000-node sphere of `examples/haptic_thread.rs` (edges of 100 N/m and
+/// 1 N·s/m, one substep at 60 Hz) the dampers gave most of a moving press's force. The model
+/// used to keep that force as if it stayed: the servo moved the proxy out, the world's next
+/// update then read the force without it and the proxy went back in, and with the world
+/// stepping every 60 ms the full solution swung by half its size from one update to the
+/// next, the simulated hand with it (see the README's haptics section for the numbers).
+fn damper_share(
+    set: &mut SurfaceSet,
+    world: &PhysicsWorld,
+    shape: &SharedShape,
+    pose: &Pose,
+) -> Vector {
+    let aabb = shape.compute_aabb(pose);
+    let size = shape.compute_local_aabb().half_extents().max_element();
+    let margin = Vector::splat(1e-3 * size);
+    let (lo, hi) = (aabb.mins - margin, aabb.maxs + margin);
+    let mut share = Vector::ZERO;
+    for (_, s, body) in attached_with_pose(&mut set.entries, world) {
+        let surface = &s.surface;
+        for &i in surface.held_list() {
+            let p = body * surface.position(i);
+            if p.cmpge(lo).all() && p.cmple(hi).all() {
+                share += body.rotation * surface.held_damper_force(i);
+            }
+        }
+    }
+    share
+}
+
+/// The model's stiffness from the secant's `stiffness`, split along the contact's force: the
+/// normal stiffness (along the force) and the tangent block, with no coupling between the two,
+/// and the normal stiffness at least half of the last model's.
+///
+/// Why: a secant fitted to updates that move the tool mostly along the normal picks up
+/// couplings from noise (a held vertex captured, the surface's creep). On the 100,000-node
+/// sphere such a coupling, 7,000 N/m against a normal stiffness of 16,000, sent the proxy
+/// sideways as the hand lifted off and the model's force grew from 0.1 N to 9 N within 30
+/// ticks. And one update whose force fell while the tool pressed on (a vertex let go) took
+/// the normal stiffness to zero: the model then pushed the hand out with a constant force
+/// until the passivity controller held the proxy, and the rendered force fell by a tenth of
+/// its peak per tick. Halving at most per update, the stiffness still follows a contact that
+/// softens over a few updates.
+fn normal_and_tangent(last: &ServoModel, force: Vector, stiffness: Matrix) -> Matrix {
+    if force == Vector::ZERO {
+        return stiffness;
+    }
+    let n = force.normalize();
+    let mut normal = n.dot(stiffness * n);
+    if last.in_contact() {
+        let m = last.force.normalize_or_zero();
+        normal = normal.max(MOST_SOFTENING * m.dot(last.stiffness * m));
+    }
+    let across = Matrix::IDENTITY - outer(n, n);
+    let split = outer(n, n) * normal.max(0.0) + across * stiffness * across;
+    if split.is_finite() {
+        split
+    } else {
+        stiffness
+    }
+}
+
+/// The least share of the last model's normal stiffness a new model keeps
+/// ([`normal_and_tangent`]).
+const MOST_SOFTENING: Real = 0.5;
 
 /// The contact's stiffness for the new model: zero out of contact; at a first touch, the last
 /// model's patch stiffness scaled to the force found (or, when the patch saw a much weaker or

@@ -102,7 +102,7 @@ pub struct ServoTick {
     pub surface_force: Vector,
     /// The model's [`super::ServoModel::sequence`].
     pub model_sequence: u64,
-    /// The model's full-solution force (at the world step's tool pose).
+    /// The model's force at the world step's tool pose ([`super::ServoModel::force`]).
     pub model_force: Vector,
 }
 

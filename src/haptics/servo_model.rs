@@ -92,9 +92,13 @@ pub struct ServoModel {
     pub sequence: u64,
     /// The tool's pose at the world step (its reference point is `tool_pose.translation`).
     pub tool_pose: Pose,
-    /// The surfaces' force on the tool at `tool_pose` (world, N): the full solution.
+    /// The surfaces' force on the tool at `tool_pose` (world, N) if it stays there: the full
+    /// solution less what the held vertices' dampers put on the tool's last move (they let go
+    /// when it stops; on a heavily damped surface most of a moving press's force).
     pub force: Vector,
-    /// The contact's stiffness around `tool_pose` (N/m, symmetric positive semi-definite).
+    /// The contact's stiffness around `tool_pose` (N/m, symmetric positive semi-definite): what
+    /// the next world update meets a move with, dampers included; no coupling between the
+    /// normal (along `force`) and the tangent directions.
     pub stiffness: Matrix,
     /// Whether the tool grasps: its contact may pull.
     pub grasping: bool,

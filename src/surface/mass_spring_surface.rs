@@ -470,6 +470,29 @@ impl MassSpringSurface {
         let edges = &self.vertex_edges[self.vertex_edge_ptr[i]..self.vertex_edge_ptr[i + 1]];
         edges.iter().map(|&e| self.k[e as usize]).sum::<f64>() as Real
     }
+    /// The held vertices (each once, whatever holds them).
+    pub(crate) fn held_list(&self) -> &[u32] {
+        &self.held_list
+    }
+    /// The force the dampers of held vertex `i`'s edges to vertices not held put on it
+    /// (`Σ c (v_j - v_i)`, surface frame, N): the part of what it pushes its holder with that
+    /// comes from the last step's velocities. Edges between held vertices are left out (over
+    /// a holder's vertices they cancel). `O(degree)`; zero out of range.
+    pub(crate) fn held_damper_force(&self, i: u32) -> Vector {
+        let i = i as usize;
+        if i + 1 >= self.vertex_edge_ptr.len() {
+            return Vector::ZERO;
+        }
+        let mut f = DVec3::ZERO;
+        for &e in &self.vertex_edges[self.vertex_edge_ptr[i]..self.vertex_edge_ptr[i + 1]] {
+            let [a, b] = self.edges[e as usize];
+            let j = if a as usize == i { b } else { a } as usize;
+            if !self.held[j] {
+                f += (self.vel[j] - self.vel[i]) * self.c[e as usize];
+            }
+        }
+        f.as_vec3()
+    }
     /// Mass of vertex `i`.
     pub fn mass(&self, i: u32) -> Real {
         self.mass[i as usize] as Real
