@@ -54,7 +54,7 @@ use faer::sparse::linalg::matmul::sparse_sparse_matmul;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Par, Side};
 use glamx::DVec3;
-use sparse_llt::{SparseLlt, COLUMN_BATCH};
+use sparse_llt::{path_dot, SparseLlt, COLUMN_BATCH};
 
 /// Why a filter could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -223,6 +223,13 @@ pub(crate) enum Filter {
         rhs: Vec<DVec3>,
         /// Columns of `S⁻¹` solved so far (for held vertices), dense.
         columns: std::collections::HashMap<u32, Vec<f64>>,
+        /// On large systems ([`PATHS_FROM`]), the elimination-tree paths of held vertices
+        /// instead ([`SparseLlt::path`]).
+        paths: std::collections::HashMap<u32, Vec<(u32, f64)>>,
+        /// Scratch of [`SparseLlt::path`].
+        path_work: Vec<f64>,
+        /// Systems of this many vertices or more keep paths ([`PATHS_FROM`]).
+        paths_from: usize,
     },
     Neighbour {
         p: Csr,
@@ -240,6 +247,9 @@ impl Filter {
                     llt,
                     rhs: vec![DVec3::ZERO; s.n],
                     columns: Default::default(),
+                    paths: Default::default(),
+                    path_work: Vec::new(),
+                    paths_from: PATHS_FROM,
                 })
             }
             FilterKind::Neighbour { rings } => Ok(Filter::Neighbour {
@@ -275,8 +285,15 @@ impl Filter {
     /// solve costs about as much as 16 of its dense columns on the 784-node plate, and six
     /// cubes on it hold about 120 vertices: 33 µs by columns).
     pub fn add_impulses(&mut self, at: &[u32], impulse: &[DVec3], out: &mut [DVec3]) {
-        if let Filter::Exact { llt, rhs, .. } = self {
-            if at.len() > SOLVE_PAST_COLUMNS {
+        if let Filter::Exact {
+            llt,
+            rhs,
+            paths_from,
+            ..
+        } = self
+        {
+            // A large system's columns are not kept (see `prepare_columns`).
+            if at.len() > SOLVE_PAST_COLUMNS || llt.n() >= *paths_from {
                 rhs.fill(DVec3::ZERO);
                 for (&j, b) in at.iter().zip(impulse) {
                     if let Some(r) = rhs.get_mut(j as usize) {
@@ -318,6 +335,35 @@ impl Filter {
         }
     }
 
+    /// The block of the filter at `list` (sorted free indices) into `out` (`h × h`, column
+    /// major, `h = list.len()`): [`Filter::prepare_columns`] then [`Filter::gather`] of each
+    /// column, or, where the exact filter keeps paths, each entry above the diagonal from two
+    /// paths, mirrored (the block is symmetric; 321 held vertices on a 200,000-vertex system
+    /// took 150 ms to gather column by column).
+    pub fn gather_block(&mut self, list: &[u32], out: &mut [f64]) {
+        let h = list.len();
+        if out.len() != h * h {
+            return;
+        }
+        self.prepare_columns(list);
+        if let Filter::Exact { paths, .. } = self {
+            let found: Option<Vec<&Vec<(u32, f64)>>> = list.iter().map(|j| paths.get(j)).collect();
+            if let Some(found) = found {
+                for b in 0..h {
+                    for a in 0..=b {
+                        let v = path_dot(found[a], found[b]);
+                        out[b * h + a] = v;
+                        out[a * h + b] = v;
+                    }
+                }
+                return;
+            }
+        }
+        for (b, &j) in list.iter().enumerate() {
+            self.gather(j, list, &mut out[b * h..(b + 1) * h]);
+        }
+    }
+
     /// Makes sure the exact filter holds columns `js` (sorted or not) of `S⁻¹`: the missing ones
     /// are solved together, up to [`COLUMN_BATCH`] right-hand sides per pass over the factor
     /// (a batch costs far less than as many single solves; see `sparse_llt`). The cache keeps
@@ -325,11 +371,47 @@ impl Filter {
     /// outside `js` are dropped first, so a held set larger than the budget is not re-solved
     /// every step (it was, at 100,000 nodes with a few hundred held vertices: seconds per step).
     /// No-op for the neighbour filter.
+    ///
+    /// On a system of [`PATHS_FROM`] vertices or more, it keeps each vertex's path in the
+    /// elimination tree instead ([`SparseLlt::path`]), and [`Filter::gather`] makes the
+    /// entries from two paths: a dense column there is a pass over the whole factor (14 ms
+    /// at 200,000 vertices), so a press that met a few hundred new vertices at once stalled
+    /// the world for most of a second (293 columns in 740 ms), and the cache, holding 20
+    /// such columns, solved 4-6 of them again at every step.
     pub fn prepare_columns(&mut self, js: &[u32]) {
-        let Filter::Exact { llt, columns, .. } = self else {
+        let Filter::Exact {
+            llt,
+            columns,
+            paths,
+            path_work,
+            paths_from,
+            ..
+        } = self
+        else {
             return;
         };
         let n = llt.n();
+        if n >= *paths_from {
+            if paths.len() + js.len() > PATH_CACHE {
+                let mut keep: Vec<u32> = js.to_vec();
+                keep.sort_unstable();
+                paths.retain(|j, _| keep.binary_search(j).is_ok());
+            }
+            let mut all = true;
+            for &j in js {
+                if (j as usize) < n && !paths.contains_key(&j) {
+                    match llt.path(j, path_work) {
+                        Some(p) => {
+                            paths.insert(j, p);
+                        }
+                        None => all = false,
+                    }
+                }
+            }
+            if all {
+                return;
+            }
+        }
         let mut missing: Vec<u32> = js
             .iter()
             .copied()
@@ -384,6 +466,13 @@ impl Filter {
 
 /// The exact filter's column cache budget (bytes); see [`Filter::prepare_columns`].
 const COLUMN_CACHE_BYTES: usize = 32 << 20;
+
+/// Systems of this many vertices or more keep elimination-tree paths rather than dense columns
+/// of `S⁻¹` ([`Filter::prepare_columns`]).
+const PATHS_FROM: usize = 50_000;
+
+/// Most paths kept ([`Filter::prepare_columns`]; each is a few thousand entries).
+const PATH_CACHE: usize = 8192;
 
 /// Impulses on more vertices than this are applied by a solve of the exact filter rather than
 /// by its cached columns (see [`Filter::add_impulses`]).

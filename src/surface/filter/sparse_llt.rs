@@ -190,6 +190,37 @@ impl SparseLlt {
         }
     }
 
+    /// `y = L⁻¹ P e_j` for column `j` of `S` (below [`Self::n`]), as `(permuted row, value)` in
+    /// increasing rows; `None` without the hand-read simplicial factor. Its only nonzeros lie on
+    /// the path from `j`'s permuted row to the root of the elimination tree (a column's pattern
+    /// holds only ancestors of it, the first row below its diagonal being its parent), so it
+    /// costs the factor's columns along that path, not the whole factor; and `S⁻¹[r, j] =
+    /// yᵣ · yⱼ` ([`path_dot`]). `work` is scratch of length [`Self::n`], left zero.
+    pub fn path(&self, j: u32, work: &mut Vec<f64>) -> Option<Vec<(u32, f64)>> {
+        let c = Columns::of(&self.symbolic, &self.values, self.simplicial.as_ref())?;
+        let n = self.n();
+        let start = *c.s.inv.get(j as usize)? as usize;
+        work.resize(n, 0.0);
+        work[start] = 1.0;
+        let mut path = Vec::new();
+        let mut k = start;
+        loop {
+            let xk = work[k] * c.s.inv_diag[k];
+            work[k] = 0.0;
+            path.push((k as u32, xk));
+            let mut parent = usize::MAX;
+            for (&i, &l) in c.below(k) {
+                work[i as usize] -= l * xk;
+                parent = parent.min(i as usize);
+            }
+            if parent >= n {
+                break;
+            }
+            k = parent;
+        }
+        Some(path)
+    }
+
     /// faer's own solve.
     fn faer_solve(&self, rhs: MatMut<'_, f64>) {
         let k = rhs.ncols();
@@ -205,6 +236,18 @@ impl SparseLlt {
             MemStack::new(&mut buffer),
         );
     }
+}
+
+/// `a · b` for two of [`SparseLlt::path`]'s vectors: an entry of `S⁻¹`. The rows two paths
+/// share are their common ancestors, the tail from where they meet to the root, so the sum
+/// runs back from the root while the rows agree: it costs the shared tail, not both paths.
+pub(crate) fn path_dot(a: &[(u32, f64)], b: &[(u32, f64)]) -> f64 {
+    a.iter()
+        .rev()
+        .zip(b.iter().rev())
+        .take_while(|(x, y)| x.0 == y.0)
+        .map(|(x, y)| x.1 * y.1)
+        .sum()
 }
 
 /// A row of right-hand sides solved together: a vertex's three coordinates, or a batch of
@@ -466,7 +509,68 @@ mod tests {
                     });
                     assert_eq!(seen, count.min(COLUMN_BATCH), "w {w}, {count} columns");
                 }
+                // Entries of the inverse from two elimination-tree paths, against its columns.
+                if llt.simplicial.is_some() {
+                    let mut work = Vec::new();
+                    let js: Vec<u32> = (0..n as u32).step_by((n / 7).max(1)).collect();
+                    let paths: Vec<_> = js
+                        .iter()
+                        .map(|&j| llt.path(j, &mut work).unwrap())
+                        .collect();
+                    assert!(work.iter().all(|&v| v == 0.0));
+                    llt.columns(&js, |k, col| {
+                        for (r, &j) in js.iter().enumerate() {
+                            let e = path_dot(&paths[k], &paths[r]);
+                            let want = col[j as usize];
+                            assert!(
+                                (e - want).abs() <= 1e-12 * want.abs().max(1.0),
+                                "w {w}: S⁻¹[{}, {}] {e} against {want}",
+                                j,
+                                js[k]
+                            );
+                        }
+                    });
+                }
             }
+        }
+    }
+
+    /// The filter's block at a few vertices and the impulses' velocity change, from paths (as
+    /// on systems of [`super::super::PATHS_FROM`] vertices or more) and from dense columns.
+    #[test]
+    fn paths_give_the_filter_block_and_impulses_as_columns_do() {
+        use super::super::{Filter, FilterKind};
+        let system = grid_system(40);
+        let dt = 1.0 / 60.0;
+        let dense = || Filter::precompute(&system, dt, FilterKind::Exact).unwrap();
+        let mut by_paths = dense();
+        if let Filter::Exact { paths_from, .. } = &mut by_paths {
+            *paths_from = 0;
+        }
+        let mut by_columns = dense();
+        let list: Vec<u32> = vec![0, 3, 41, 42, 43, 90, 777, 1200, 1599];
+        let h = list.len();
+        let (mut a, mut b) = (vec![0.0; h * h], vec![0.0; h * h]);
+        by_paths.gather_block(&list, &mut a);
+        by_columns.gather_block(&list, &mut b);
+        if let Filter::Exact { paths, columns, .. } = &by_paths {
+            assert_eq!(paths.len(), h);
+            assert!(columns.is_empty());
+        }
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (x - y).abs() <= 1e-12 * y.abs().max(1e-3),
+                "{x} against {y}"
+            );
+        }
+        // A few impulses: a solve on one side, cached columns on the other.
+        let impulse: Vec<DVec3> = vec3s(3);
+        let n = system.mass.len();
+        let (mut va, mut vb) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        by_paths.add_impulses(&list[..3], &impulse, &mut va);
+        by_columns.add_impulses(&list[..3], &impulse, &mut vb);
+        for (x, y) in va.iter().zip(&vb) {
+            assert!((*x - *y).abs().max_element() <= 1e-12, "{x} against {y}");
         }
     }
 

@@ -87,10 +87,7 @@ pub(super) fn constrain(
     };
     // P restricted to the involved vertices (h × h), one column read each.
     let mut p_hh = zeroed(&mut memory.scratch.block, h, h);
-    filter.prepare_columns(&list);
-    for (b, &fj) in list.iter().enumerate() {
-        filter.gather(fj, &list, p_hh.column_mut(b).as_mut_slice());
-    }
+    filter.gather_block(&list, p_hh.as_mut_slice());
     let m = cons.len();
     // P's column k (column-major storage): P[(j, k)] = p_col[k * h + j] = P[(k, j)].
     let p_col = p_hh.as_slice();
