@@ -228,6 +228,9 @@ pub(crate) enum Filter {
         paths: std::collections::HashMap<u32, Vec<(u32, f64)>>,
         /// Scratch of [`SparseLlt::path`].
         path_work: Vec<f64>,
+        /// Entries of `S⁻¹` made from paths, by `(smaller, larger)` index: a held set changes
+        /// little from one substep to the next.
+        entries: std::collections::HashMap<(u32, u32), f64>,
         /// Systems of this many vertices or more keep paths ([`PATHS_FROM`]).
         paths_from: usize,
     },
@@ -249,6 +252,7 @@ impl Filter {
                     columns: Default::default(),
                     paths: Default::default(),
                     path_work: Vec::new(),
+                    entries: Default::default(),
                     paths_from: PATHS_FROM,
                 })
             }
@@ -339,19 +343,27 @@ impl Filter {
     /// major, `h = list.len()`): [`Filter::prepare_columns`] then [`Filter::gather`] of each
     /// column, or, where the exact filter keeps paths, each entry above the diagonal from two
     /// paths, mirrored (the block is symmetric; 321 held vertices on a 200,000-vertex system
-    /// took 150 ms to gather column by column).
+    /// took 150 ms to gather column by column) and kept for the next substeps (in the 100,000-
+    /// vertex plate of `benches/haptic_servo.rs`, held still, the entries made anew at every
+    /// step cost more than the dense columns they replaced, which were kept).
     pub fn gather_block(&mut self, list: &[u32], out: &mut [f64]) {
         let h = list.len();
         if out.len() != h * h {
             return;
         }
         self.prepare_columns(list);
-        if let Filter::Exact { paths, .. } = self {
+        if let Filter::Exact { paths, entries, .. } = self {
             let found: Option<Vec<&Vec<(u32, f64)>>> = list.iter().map(|j| paths.get(j)).collect();
             if let Some(found) = found {
+                if entries.len() > ENTRY_CACHE {
+                    entries.clear();
+                }
                 for b in 0..h {
                     for a in 0..=b {
-                        let v = path_dot(found[a], found[b]);
+                        let key = (list[a].min(list[b]), list[a].max(list[b]));
+                        let v = *entries
+                            .entry(key)
+                            .or_insert_with(|| path_dot(found[a], found[b]));
                         out[b * h + a] = v;
                         out[a * h + b] = v;
                     }
@@ -473,6 +485,9 @@ const PATHS_FROM: usize = 50_000;
 
 /// Most paths kept ([`Filter::prepare_columns`]; each is a few thousand entries).
 const PATH_CACHE: usize = 8192;
+
+/// Most entries of `S⁻¹` kept from paths ([`Filter::gather_block`]): about 32 MB.
+const ENTRY_CACHE: usize = 1 << 20;
 
 /// Impulses on more vertices than this are applied by a solve of the exact filter rather than
 /// by its cached columns (see [`Filter::add_impulses`]).
