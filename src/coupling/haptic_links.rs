@@ -250,10 +250,7 @@ fn damper_share(
     shape: &SharedShape,
     pose: &Pose,
 ) -> Vector {
-    let aabb = shape.compute_aabb(pose);
-    let size = shape.compute_local_aabb().half_extents().max_element();
-    let margin = Vector::splat(1e-3 * size);
-    let (lo, hi) = (aabb.mins - margin, aabb.maxs + margin);
+    let (lo, hi) = touch_box(shape, pose);
     let mut share = Vector::ZERO;
     for (_, s, body) in attached_with_pose(&mut set.entries, world) {
         let surface = &s.surface;
@@ -267,13 +264,22 @@ fn damper_share(
     share
 }
 
+/// The corners (world) of the bounding box of `shape` at `pose` grown by a thousandth of its
+/// size: where the vertices it touches lie.
+fn touch_box(shape: &SharedShape, pose: &Pose) -> (Vector, Vector) {
+    let aabb = shape.compute_aabb(pose);
+    let size = shape.compute_local_aabb().half_extents().max_element();
+    let margin = Vector::splat(1e-3 * size);
+    (aabb.mins - margin, aabb.maxs + margin)
+}
+
 /// The model's stiffness from the secant's `stiffness`, split along the contact's force: the
 /// normal stiffness (along the force) and the tangent block, with no coupling between the two,
 /// and the normal stiffness at least half of the last model's.
 ///
 /// Why: a secant fitted to updates that move the tool mostly along the normal picks up
 /// couplings from noise (a held vertex captured, the surface's creep). On the 100,000-node
-/// sphere such a coupling, 7,000 N/m against a normal stiffness of 16,000, sent the proxy
+/// sphere such a coupling, 7,000 N/m against a normal stiffness of 16,600, sent the proxy
 /// sideways as the hand lifted off and the model's force grew from 0.1 N to 9 N within 30
 /// ticks. And one update whose force fell while the tool pressed on (a vertex let go) took
 /// the normal stiffness to zero: the model then pushed the hand out with a constant force
@@ -453,10 +459,8 @@ fn touched_stiffness(
     shape: &SharedShape,
     pose: &Pose,
 ) -> Real {
-    let aabb = shape.compute_aabb(pose);
     let size = shape.compute_local_aabb().half_extents().max_element();
-    let margin = Vector::splat(1e-3 * size);
-    let (lo, hi) = (aabb.mins - margin, aabb.maxs + margin);
+    let (lo, hi) = touch_box(shape, pose);
     let mut k = 0.0;
     let mut near = Vec::new();
     for (_, s, body) in attached_with_pose(&mut set.entries, world) {

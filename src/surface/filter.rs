@@ -385,7 +385,7 @@ impl Filter {
     /// No-op for the neighbour filter.
     ///
     /// On a system of [`PATHS_FROM`] vertices or more, it keeps each vertex's path in the
-    /// elimination tree instead ([`SparseLlt::path`]), and [`Filter::gather`] makes the
+    /// elimination tree instead ([`SparseLlt::path`]), and [`Filter::gather_block`] makes the
     /// entries from two paths: a dense column there is a pass over the whole factor (14 ms
     /// at 200,000 vertices), so a press that met a few hundred new vertices at once stalled
     /// the world for most of a second (293 columns in 740 ms), and the cache, holding 20
@@ -483,8 +483,10 @@ const COLUMN_CACHE_BYTES: usize = 32 << 20;
 /// of `S⁻¹` ([`Filter::prepare_columns`]).
 const PATHS_FROM: usize = 50_000;
 
-/// Most paths kept ([`Filter::prepare_columns`]; each is a few thousand entries).
-const PATH_CACHE: usize = 8192;
+/// Most paths kept ([`Filter::prepare_columns`]; each is a few thousand entries of 16 bytes
+/// on a system of 100,000 vertices or more: some 50 MB in all at most, and never fewer than a
+/// solve asks for).
+const PATH_CACHE: usize = 1024;
 
 /// Most entries of `S⁻¹` kept from paths ([`Filter::gather_block`]): about 32 MB.
 const ENTRY_CACHE: usize = 1 << 20;
