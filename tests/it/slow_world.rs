@@ -12,7 +12,8 @@
 //! update to the next and the hand with it: the rendered force jumped between ticks by 6.8 %
 //! of its peak at 200 ticks a step late and by 51 % at 500 ticks with no delay (3.0-3.7 % at
 //! 300). The limit: at 700 ticks here, and from 500 ticks on the 100,000-node sphere, the
-//! hand still bounces (a step that long captures a hundred vertices or more at once).
+//! hand still bounces (a step that long captures a hundred vertices or more at once). Also
+//! here: the model read against the next update of a press that stops.
 
 use rapier_touch::haptics::{haptic_link, Servo, SimulatedHand, VirtualCoupling};
 use rapier_touch::prelude::*;
@@ -84,5 +85,64 @@ fn a_slow_world_over_a_damped_surface_does_not_shake_the_hand() {
             jump <= 0.05 * peak,
             "{ticks} ticks per update, late {late}: jumped {jump} N of a {peak} N peak"
         );
+    }
+}
+
+/// The model's force is what the next update reads if the tool stops: a ball pressed into the
+/// damped 3,000-node sphere at a steady speed, then held, on surfaces of three dampings. At the
+/// last moving update the full solution holds the dampers' resistance to the press, which
+/// goes at the next update; the model (published at that last moving update) must be nearer
+/// the next update's full solution than the moving one was: within half the change.
+#[test]
+fn the_model_reads_what_the_next_update_gives_a_tool_that_stops() {
+    for c in [0.3f32, 1.0, 3.0] {
+        for speed in [0.02f32, 0.05] {
+            let mut scene = HapticScene::sphere(3_000, 1);
+            let surface = scene.surface;
+            scene
+                .set
+                .get_mut(surface)
+                .unwrap()
+                .surface
+                .set_spring(100.0, c)
+                .unwrap();
+            let mut link = scene.link(0);
+            let (p, n) = scene.press[0];
+            let dt = scene.world.integration_parameters.dt;
+            let tool = scene.tools[0];
+            // From just over the surface, pressed along the normal for 0.4 s, then held.
+            let start = p + n * (scene.radius + 0.002);
+            let steps = (0.4 / dt).round() as u64;
+            let mut moving = None;
+            let mut stopped = None;
+            for k in 0..steps + 2 {
+                let depth = speed * dt * (k.min(steps) as f32);
+                let at = Pose::from_translation(start - n * depth);
+                link.send(rapier_touch::haptics::DeviceSample {
+                    tick: k + 1,
+                    device: at,
+                    proxy: at,
+                    ..Default::default()
+                });
+                scene.set.step(&mut scene.world);
+                let full = scene.set.tool_reaction(tool).unwrap().force;
+                if k == steps {
+                    moving = Some((full, link.model().force));
+                } else if k == steps + 1 {
+                    stopped = Some(full);
+                }
+            }
+            let ((moving, model), stopped) = (moving.unwrap(), stopped.unwrap());
+            let change = (moving - stopped).length();
+            let miss = (model - stopped).length();
+            println!(
+                "c {c}, {speed} m/s: moving {moving:.4}, stopped {stopped:.4}, model {model:.4}"
+            );
+            assert!(stopped.length() > 0.05, "c {c}, {speed} m/s: {stopped}");
+            assert!(
+                miss <= 0.5 * change,
+                "c {c}, {speed} m/s: the model {model} misses the stopped tool's {stopped} by {miss} N; the moving one read {moving} ({change} N off)"
+            );
+        }
     }
 }
