@@ -341,7 +341,8 @@ impl Filter {
 
     /// The block of the filter at `list` (sorted free indices) into `out` (`h × h`, column
     /// major, `h = list.len()`): [`Filter::prepare_columns`] then [`Filter::gather`] of each
-    /// column, or, where the exact filter keeps paths, each entry above the diagonal from two
+    /// column, or, where the exact filter keeps paths ([`Filter::prepare_paths`]), each entry
+    /// above the diagonal from two
     /// paths, mirrored (the block is symmetric; 321 held vertices on a 200,000-vertex system
     /// took 150 ms to gather column by column) and kept for the next substeps (in the 100,000-
     /// vertex plate of `benches/haptic_servo.rs`, held still, the entries made anew at every
@@ -351,8 +352,10 @@ impl Filter {
         if out.len() != h * h {
             return;
         }
-        self.prepare_columns(list);
-        if let Filter::Exact { paths, entries, .. } = self {
+        if self.prepare_paths(list) {
+            let Filter::Exact { paths, entries, .. } = self else {
+                return;
+            };
             let found: Option<Vec<&Vec<(u32, f64)>>> = list.iter().map(|j| paths.get(j)).collect();
             if let Some(found) = found {
                 if entries.len() > ENTRY_CACHE {
@@ -371,9 +374,50 @@ impl Filter {
                 return;
             }
         }
+        self.prepare_columns(list);
         for (b, &j) in list.iter().enumerate() {
             self.gather(j, list, &mut out[b * h..(b + 1) * h]);
         }
+    }
+
+    /// On an exact filter of [`PATHS_FROM`] vertices or more, makes sure it holds the path in
+    /// the elimination tree ([`SparseLlt::path`]) of every vertex of `js` below its order, for
+    /// [`Filter::gather_block`] to make entries from; `false` (nothing done) elsewhere, or
+    /// where the factor is not the hand-read simplicial one. A dense column there is a pass
+    /// over the whole factor (14 ms at 200,000 vertices), so a press that met a few hundred
+    /// new vertices at once stalled the world for most of a second (293 columns in 740 ms),
+    /// and the column cache, holding 20 such columns, solved 4-6 of them again at every step.
+    fn prepare_paths(&mut self, js: &[u32]) -> bool {
+        let Filter::Exact {
+            llt,
+            paths,
+            path_work,
+            paths_from,
+            ..
+        } = self
+        else {
+            return false;
+        };
+        let n = llt.n();
+        if n < *paths_from {
+            return false;
+        }
+        if paths.len() + js.len() > PATH_CACHE {
+            let mut keep: Vec<u32> = js.to_vec();
+            keep.sort_unstable();
+            paths.retain(|j, _| keep.binary_search(j).is_ok());
+        }
+        for &j in js {
+            if (j as usize) < n && !paths.contains_key(&j) {
+                match llt.path(j, path_work) {
+                    Some(p) => {
+                        paths.insert(j, p);
+                    }
+                    None => return false,
+                }
+            }
+        }
+        true
     }
 
     /// Makes sure the exact filter holds columns `js` (sorted or not) of `S⁻¹`: the missing ones
@@ -383,47 +427,11 @@ impl Filter {
     /// outside `js` are dropped first, so a held set larger than the budget is not re-solved
     /// every step (it was, at 100,000 nodes with a few hundred held vertices: seconds per step).
     /// No-op for the neighbour filter.
-    ///
-    /// On a system of [`PATHS_FROM`] vertices or more, it keeps each vertex's path in the
-    /// elimination tree instead ([`SparseLlt::path`]), and [`Filter::gather_block`] makes the
-    /// entries from two paths: a dense column there is a pass over the whole factor (14 ms
-    /// at 200,000 vertices), so a press that met a few hundred new vertices at once stalled
-    /// the world for most of a second (293 columns in 740 ms), and the cache, holding 20
-    /// such columns, solved 4-6 of them again at every step.
     pub fn prepare_columns(&mut self, js: &[u32]) {
-        let Filter::Exact {
-            llt,
-            columns,
-            paths,
-            path_work,
-            paths_from,
-            ..
-        } = self
-        else {
+        let Filter::Exact { llt, columns, .. } = self else {
             return;
         };
         let n = llt.n();
-        if n >= *paths_from {
-            if paths.len() + js.len() > PATH_CACHE {
-                let mut keep: Vec<u32> = js.to_vec();
-                keep.sort_unstable();
-                paths.retain(|j, _| keep.binary_search(j).is_ok());
-            }
-            let mut all = true;
-            for &j in js {
-                if (j as usize) < n && !paths.contains_key(&j) {
-                    match llt.path(j, path_work) {
-                        Some(p) => {
-                            paths.insert(j, p);
-                        }
-                        None => all = false,
-                    }
-                }
-            }
-            if all {
-                return;
-            }
-        }
         let mut missing: Vec<u32> = js
             .iter()
             .copied()
@@ -480,10 +488,10 @@ impl Filter {
 const COLUMN_CACHE_BYTES: usize = 32 << 20;
 
 /// Systems of this many vertices or more keep elimination-tree paths rather than dense columns
-/// of `S⁻¹` ([`Filter::prepare_columns`]).
+/// of `S⁻¹` ([`Filter::prepare_paths`]).
 const PATHS_FROM: usize = 50_000;
 
-/// Most paths kept ([`Filter::prepare_columns`]; each is a few thousand entries of 16 bytes
+/// Most paths kept ([`Filter::prepare_paths`]; each is a few thousand entries of 16 bytes
 /// on a system of 100,000 vertices or more: some 50 MB in all at most, and never fewer than a
 /// solve asks for).
 const PATH_CACHE: usize = 1024;
