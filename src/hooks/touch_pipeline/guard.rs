@@ -424,35 +424,39 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     )
                                     .is_ok_and(|d| d.distance <= resting_slop)
                             };
-                            // rapier's manifold may hold no point for a pair that touched
-                            // when the step began: parry's `f32` query on a box a hundred times
-                            // the mover's size lost a 1 km hull lying 0.2 m into a 100 km plate
-                            // (it read them 17 m apart a step before), and walked back along
-                            // its path the sliding hull stopped dead. Such a pair is read at the
-                            // step's start on the box's part near the mover (`contact_near`).
-                            let missed_at_start = || {
-                                rapier.is_none()
-                                    && !is_tool
-                                    && !partner_dynamic
-                                    && contact_near(
-                                        partner.shape(),
-                                        &previous_collider_pose(
-                                            &self.hooks.prev_poses,
-                                            partner,
-                                            partner_pose,
-                                        ),
-                                        co.shape(),
-                                        &prev_pose,
-                                        slop,
-                                    )
-                                    .flatten()
-                                    .is_some_and(|c| c.dist < slop)
-                            };
-                            let blocked_at_start = config.on_trajectory
+                            // rapier's manifold may miss a pair that touched when the step
+                            // began: parry's `f32` query on a box a hundred times the mover's
+                            // size held no point for a 1 km hull lying 0.2 m into a 100 km plate
+                            // (it read them 17 m apart a step before), and read a 1 mm hull on a
+                            // plate 300 times its size apart along a normal 45° off the plate's.
+                            // Walked back along their paths, both stopped dead. A still pair
+                            // whose path is undone almost whole while rapier showed it apart is
+                            // read at the step's start on the box's part near the mover
+                            // (`contact_near`); touching there, it is blocked at its start, and
+                            // pushed out along parry's normal at the pose now, not rapier's.
+                            let missed_at_start = config.on_trajectory
+                                && !overlapped
+                                && !is_tool
+                                && !partner_dynamic
                                 && partner.shape().is_convex()
-                                && (((overlapped || missed_at_start())
-                                    && undone_almost_whole(&config))
-                                    || rolling());
+                                && undone_almost_whole(&config)
+                                && contact_near(
+                                    partner.shape(),
+                                    &previous_collider_pose(
+                                        &self.hooks.prev_poses,
+                                        partner,
+                                        partner_pose,
+                                    ),
+                                    co.shape(),
+                                    &prev_pose,
+                                    slop,
+                                )
+                                .flatten()
+                                .is_some_and(|c| c.dist < slop);
+                            let blocked_at_start = missed_at_start
+                                || config.on_trajectory
+                                    && partner.shape().is_convex()
+                                    && ((overlapped && undone_almost_whole(&config)) || rolling());
                             // A path that met a still, convex partner at a graze (within about
                             // 15° of the contact plane) is pushed out along the contact's normal
                             // too, keeping its motion along the plane: walked back along its
@@ -480,6 +484,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 // (rapier holds no normal for a pair it found apart when the
                                 // step began: parry's at the pose now, as below.)
                                 rapier
+                                    .filter(|_| !missed_at_start)
                                     .and_then(|_| rapier_normal(world, ph, ch))
                                     .or_else(near_normal)
                                     .and_then(push_out)
