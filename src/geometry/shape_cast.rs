@@ -124,8 +124,24 @@ impl Reconstructor {
             Advance::Apart => {
                 // Separated all along (closer than the touch tolerance at the end: touching).
                 if let Some(c) = walk.contact(&end) {
-                    result.state = TouchState::Touching;
                     result.patches.push(vertex_patch(c.point1, c.normal1));
+                    if c.dist < -tol {
+                        // The advance read the path apart, yet the shapes overlap at its end:
+                        // its bound on parry's distance missed the touch (a 13 m cone
+                        // tumbling onto a plate 50 times its size, 0.34 m deep at the end,
+                        // was read apart all along and left there). No first touch is known
+                        // on the path: the way out is along the contact normal at the pose
+                        // now, as for a pair in contact when the step began.
+                        result.state = TouchState::Penetrating;
+                        result.reversing_vector = c.normal1 * -c.dist;
+                        result.depth = -c.dist;
+                        result.touch_pose = Pose::from_parts(
+                            end.translation + result.reversing_vector,
+                            end.rotation,
+                        );
+                    } else {
+                        result.state = TouchState::Touching;
+                    }
                 }
                 Ok(Some(result))
             }
