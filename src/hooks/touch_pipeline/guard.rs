@@ -4,7 +4,7 @@
 //! leaves alone before measuring them are sorted out in `left_alone.rs`.
 
 use super::articulations::{articulated, same_articulation};
-use super::correction::{apply_correction, normal_toward_mover, undone_almost_whole};
+use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, SlowPair};
 use super::left_alone::Screen;
 use super::pair_view::{push_out, resting_within, safe_step, slow_pair_calm, Mover, PairView};
@@ -465,13 +465,28 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // second. (A curved pair's push asks only the near part of a huge
                             // box: asked of the whole plate, 200 times their size, it read
                             // cones apart while they were in it, and they went through.)
-                            let graze_normal = normal_toward_mover(&config).filter(|n| {
-                                config.on_trajectory
-                                    && !blocked_at_start
-                                    && !partner_dynamic
-                                    && partner.shape().is_convex()
-                                    && n.dot(config.direction).abs() < crate::geometry::GRAZING
-                            });
+                            // (Out of a convex partner is away from its middle: turned by the
+                            // way back along the path, a 697 m capsule whose path rose by 0.5 %
+                            // as it crossed a plate 50 times its size had its normal turned into
+                            // the plate, and was pushed 494 m down through it.)
+                            let graze_normal = config
+                                .patches
+                                .first()
+                                .map(|p| {
+                                    let middle = partner.compute_aabb().center();
+                                    if p.normal.dot(config.touch_pose.translation - middle) < 0.0 {
+                                        -p.normal
+                                    } else {
+                                        p.normal
+                                    }
+                                })
+                                .filter(|n| {
+                                    config.on_trajectory
+                                        && !blocked_at_start
+                                        && !partner_dynamic
+                                        && partner.shape().is_convex()
+                                        && n.dot(config.direction).abs() < crate::geometry::GRAZING
+                                });
                             let along_normal = if (config.on_trajectory
                                 && !blocked_at_start
                                 && graze_normal.is_none())
