@@ -31,6 +31,7 @@ mod hook_flags;
 mod impacts;
 mod left_alone;
 mod meshes;
+mod misread;
 mod movers;
 mod pair_view;
 pub(crate) mod pose_sync;

@@ -614,8 +614,8 @@ fn a_cone_the_walk_read_apart_is_pushed_out() {
 /// 0.5 % as it grazed the plate (seed 9 of the thin-plate property at 300 cases): the graze's
 /// normal was turned toward where the capsule came from along its path, into the plate, and the
 /// push out went 494 m down through the 28 m plate (78 thicknesses; also on the code before this
-/// session). Out of a convex partner is now away from its middle: within a quarter of the
-/// thickness in both modes.
+/// session). The normal out of a convex partner now points away from its centre of mass at the
+/// contact point: within a quarter of the thickness in both modes.
 #[test]
 fn a_capsule_grazing_a_huge_plate_is_pushed_out_of_it() {
     let r = check_drawn(

@@ -7,6 +7,7 @@ use super::articulations::{articulated, same_articulation};
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, SlowPair};
 use super::left_alone::Screen;
+use super::misread::{depth_misread, normal_out_of_convex, touching_at_start};
 use super::pair_view::{push_out, resting_within, safe_step, slow_pair_calm, Mover, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{rapier_normal, resting_slop};
@@ -198,36 +199,21 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             partner_dynamic,
                             turned_since_update,
                         } = view.unwrap_or_else(|| screen.read(ph, partner, rapier_pair));
-                        // rapier's points are parry's `f32` queries on world coordinates: on a
-                        // body far smaller than its still partner they can be wrong. A 0.14 mm
-                        // hull skimming a 5 µm plate 300 times its size was held 134 µm deep
-                        // when the step began, along a normal out of the plate's bottom: the
-                        // guard took it as a resting pair that deep, then pushed it down
-                        // through the plate. A still pair rapier holds deeper than a quarter
-                        // of the mover's thinnest extent (and the resting slop) at the step's
-                        // start is checked on coordinates scaled to the mover (`contact_near`);
-                        // read less than half as deep, rapier's points are set aside and the
-                        // pair is read as one rapier holds no point for. (Checked from the
-                        // resting slop on, the CCD stress scene cost 12 % more.)
+                        // rapier's points on a body far smaller than its still partner can be
+                        // wrong; a deep resting overlap they claim is checked (`misread.rs`),
+                        // and, misread, they are set aside: the pair is read as one rapier
+                        // holds no point for.
+                        let partner_prev =
+                            previous_collider_pose(&self.hooks.prev_poses, partner, partner_pose);
                         let rapier = rapier.filter(|r| {
                             partner_dynamic
-                                || !(r.in_contact_at_start
-                                    && r.depth_at_start
-                                        > self.options.resting_slop.max(0.25 * mesh.min_extent()))
-                                || contact_near(
-                                    partner.shape(),
-                                    &previous_collider_pose(
-                                        &self.hooks.prev_poses,
-                                        partner,
-                                        partner_pose,
-                                    ),
-                                    co.shape(),
-                                    &prev_pose,
-                                    0.0,
+                                || !r.in_contact_at_start
+                                || !depth_misread(
+                                    r.depth_at_start,
+                                    self.options.resting_slop.max(0.25 * mesh.min_extent()),
+                                    (partner, &partner_prev),
+                                    (co, &prev_pose),
                                 )
-                                .is_none_or(|c| {
-                                    c.is_some_and(|c| -c.dist >= 0.5 * r.depth_at_start)
-                                })
                         });
                         let overlapped = rapier.is_some_and(|r| r.in_contact_at_start);
                         let safe = safe_step(&mesh, &partner_mesh);
@@ -410,11 +396,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // away from them): within the resting slop of it when the step began,
                             // by parry's distance on the shapes.
                             let rolling = || {
-                                let partner_prev = previous_collider_pose(
-                                    &self.hooks.prev_poses,
-                                    partner,
-                                    partner_pose,
-                                );
                                 curved
                                     && parry3d::query::distance(
                                         &partner_prev,
@@ -425,34 +406,21 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                     .is_ok_and(|d| d.distance <= resting_slop)
                             };
                             // rapier's manifold may miss a pair that touched when the step
-                            // began: parry's `f32` query on a box a hundred times the mover's
-                            // size held no point for a 1 km hull lying 0.2 m into a 100 km plate
-                            // (it read them 17 m apart a step before), and read a 1 mm hull on a
-                            // plate 300 times its size apart along a normal 45° off the plate's.
-                            // Walked back along their paths, both stopped dead. A still pair
-                            // whose path is undone almost whole while rapier showed it apart is
-                            // read at the step's start on the box's part near the mover
-                            // (`contact_near`); touching there, it is blocked at its start, and
-                            // pushed out along parry's normal at the pose now, not rapier's.
+                            // began (`misread.rs`): a still pair whose path is undone almost
+                            // whole while rapier showed it apart, touching at the step's start
+                            // by the scaled query, is blocked at its start, and pushed out along
+                            // parry's normal at the pose now, not rapier's.
                             let missed_at_start = config.on_trajectory
                                 && !overlapped
                                 && !is_tool
                                 && !partner_dynamic
                                 && partner.shape().is_convex()
                                 && undone_almost_whole(&config)
-                                && contact_near(
-                                    partner.shape(),
-                                    &previous_collider_pose(
-                                        &self.hooks.prev_poses,
-                                        partner,
-                                        partner_pose,
-                                    ),
-                                    co.shape(),
-                                    &prev_pose,
+                                && touching_at_start(
+                                    (partner, &partner_prev),
+                                    (co, &prev_pose),
                                     slop,
-                                )
-                                .flatten()
-                                .is_some_and(|c| c.dist < slop);
+                                );
                             let blocked_at_start = missed_at_start
                                 || config.on_trajectory
                                     && partner.shape().is_convex()
@@ -465,28 +433,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             // second. (A curved pair's push asks only the near part of a huge
                             // box: asked of the whole plate, 200 times their size, it read
                             // cones apart while they were in it, and they went through.)
-                            // (Out of a convex partner is away from its middle: turned by the
-                            // way back along the path, a 697 m capsule whose path rose by 0.5 %
-                            // as it crossed a plate 50 times its size had its normal turned into
-                            // the plate, and was pushed 494 m down through it.)
-                            let graze_normal = config
-                                .patches
-                                .first()
-                                .map(|p| {
-                                    let middle = partner.compute_aabb().center();
-                                    if p.normal.dot(config.touch_pose.translation - middle) < 0.0 {
-                                        -p.normal
-                                    } else {
-                                        p.normal
-                                    }
-                                })
-                                .filter(|n| {
-                                    config.on_trajectory
-                                        && !blocked_at_start
-                                        && !partner_dynamic
-                                        && partner.shape().is_convex()
-                                        && n.dot(config.direction).abs() < crate::geometry::GRAZING
-                                });
+                            // (Its normal turned out of the partner: `misread.rs`.)
+                            let graze_normal = (config.on_trajectory
+                                && !blocked_at_start
+                                && !partner_dynamic
+                                && partner.shape().is_convex())
+                            .then(|| normal_out_of_convex(&config, (partner, &partner_pose)))
+                            .flatten()
+                            .filter(|n| n.dot(config.direction).abs() < crate::geometry::GRAZING);
                             let along_normal = if (config.on_trajectory
                                 && !blocked_at_start
                                 && graze_normal.is_none())
