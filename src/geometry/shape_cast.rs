@@ -121,33 +121,13 @@ impl Reconstructor {
         let first = walk.advance(|t| motion.pose_at(t), speed, Some(drift), 1.0);
         match first {
             Advance::Unsupported => Ok(None),
-            Advance::Apart => {
-                // Separated all along (closer than the touch tolerance at the end: touching).
-                if let Some(c) = walk.contact(&end) {
-                    result.patches.push(vertex_patch(c.point1, c.normal1));
-                    if c.dist < -tol {
-                        // The advance read the path apart, yet the shapes overlap at its end:
-                        // its bound on parry's distance missed the touch (a 13 m cone
-                        // tumbling onto a plate 50 times its size, 0.34 m deep at the end,
-                        // was read apart all along and left there). No first touch is known
-                        // on the path: the way out is along the contact normal at the pose
-                        // now, as for a pair in contact when the step began.
-                        result.state = TouchState::Penetrating;
-                        result.reversing_vector = c.normal1 * -c.dist;
-                        result.depth = -c.dist;
-                        result.touch_pose = Pose::from_parts(
-                            end.translation + result.reversing_vector,
-                            end.rotation,
-                        );
-                    } else {
-                        result.state = TouchState::Touching;
-                    }
-                }
-                Ok(Some(result))
-            }
-            Advance::InContact => {
-                // In contact when the step began: no first touch on this path, the way out is
-                // along the contact normal at the pose now.
+            // In contact when the step began: no first touch on this path, the way out is
+            // along the contact normal at the pose now. So too for a path read apart all along
+            // whose end overlaps (closer than the touch tolerance there, it only touches): the
+            // advance's bound on parry's distance missed the touch (a 13 m cone tumbling onto
+            // a plate 50 times its size, 0.34 m deep at the end, was read apart all along and
+            // left there), and no first touch is known on the path.
+            Advance::Apart | Advance::InContact => {
                 let Some(c) = walk.contact(&end) else {
                     return Ok(Some(result));
                 };

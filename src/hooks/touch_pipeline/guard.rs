@@ -203,15 +203,18 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // wrong; a deep resting overlap they claim is checked (`misread.rs`),
                         // and, misread, they are set aside: the pair is read as one rapier
                         // holds no point for.
-                        let partner_prev =
-                            previous_collider_pose(&self.hooks.prev_poses, partner, partner_pose);
+                        // (Where the partner was when the step began: asked only by the few
+                        // pairs that need it, not by every pair of a pile.)
+                        let partner_prev = || {
+                            previous_collider_pose(&self.hooks.prev_poses, partner, partner_pose)
+                        };
                         let rapier = rapier.filter(|r| {
                             partner_dynamic
                                 || !r.in_contact_at_start
                                 || !depth_misread(
                                     r.depth_at_start,
                                     self.options.resting_slop.max(0.25 * mesh.min_extent()),
-                                    (partner, &partner_prev),
+                                    (partner, &partner_prev()),
                                     (co, &prev_pose),
                                 )
                         });
@@ -398,7 +401,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                             let rolling = || {
                                 curved
                                     && parry3d::query::distance(
-                                        &partner_prev,
+                                        &partner_prev(),
                                         partner.shape(),
                                         &prev_pose,
                                         co.shape(),
@@ -417,7 +420,7 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 && partner.shape().is_convex()
                                 && undone_almost_whole(&config)
                                 && touching_at_start(
-                                    (partner, &partner_prev),
+                                    (partner, &partner_prev()),
                                     (co, &prev_pose),
                                     slop,
                                 );

@@ -1,10 +1,12 @@
 //! Where the step guard does not take rapier's contact points (or its own reading of a graze)
 //! at their word: rapier's points are parry's `f32` queries on world coordinates, which go wrong
 //! on a body far smaller than its still partner (a sub-millimetre body, or a plate hundreds of
-//! times the body's size). These checks ask `geometry::contact_near` instead: on coordinates
-//! scaled to the smaller shape, of a huge box only its part near the mover.
+//! times the body's size). These checks ask `geometry::contact_near` instead
+//! ([`parry_overlap_within`]): on coordinates scaled to the smaller shape, of a huge box only
+//! its part near the mover.
 
-use crate::geometry::{contact_near, ContactConfiguration};
+use super::pair_view::parry_overlap_within;
+use crate::geometry::ContactConfiguration;
 use crate::math::{Pose, Real, Vector};
 use rapier3d::geometry::Collider;
 
@@ -22,8 +24,8 @@ pub(super) fn depth_misread(
     (co, prev_pose): (&Collider, &Pose),
 ) -> bool {
     depth_at_start > claim_from
-        && contact_near(partner.shape(), partner_prev, co.shape(), prev_pose, 0.0)
-            .is_some_and(|c| c.is_none_or(|c| -c.dist < 0.5 * depth_at_start))
+        && parry_overlap_within((partner, partner_prev), (co, prev_pose), 0.0)
+            .is_some_and(|(overlap, _)| overlap < 0.5 * depth_at_start)
 }
 
 /// Whether the mover `co` (at `prev_pose` when the step began) touched the still `partner` (at
@@ -37,9 +39,8 @@ pub(super) fn touching_at_start(
     (co, prev_pose): (&Collider, &Pose),
     slop: Real,
 ) -> bool {
-    contact_near(partner.shape(), partner_prev, co.shape(), prev_pose, slop)
-        .flatten()
-        .is_some_and(|c| c.dist < slop)
+    parry_overlap_within((partner, partner_prev), (co, prev_pose), slop)
+        .is_some_and(|(overlap, _)| overlap > -slop)
 }
 
 /// The normal of `config`'s first patch, turned out of the convex `partner` (at

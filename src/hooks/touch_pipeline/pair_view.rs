@@ -433,21 +433,6 @@ pub(super) fn parry_depth(
         .map(|c| c.map_or(0.0, |c| -c.dist))
 }
 
-/// [`parry_depth`] asked as the shape method asks it (`geometry::contact_near`: on coordinates
-/// scaled to the smaller shape, a huge box only for its part near the mover). Below a
-/// millimetre parry's query on world coordinates read a 0.13 mm hull 2 µm into a 5 µm plate
-/// as apart (rapier itself holds no contact at that size), and the guard let the hull fall
-/// through. (Not used for the curved pairs of [`slow_pair_calm`]: read exactly, a cone rolling
-/// on a 200 m floor was pushed out at every step and rolled less than half as far as in
-/// vanilla rapier.)
-pub(super) fn near_depth(
-    (partner, partner_pose): (&rapier3d::geometry::Collider, &Pose),
-    (mover, pose): (&rapier3d::geometry::Collider, &Pose),
-) -> Option<Real> {
-    contact_near(partner.shape(), partner_pose, mover.shape(), pose, 0.0)
-        .map(|c| c.map_or(0.0, |c| -c.dist))
-}
-
 /// How deep `mover` (at `pose`) overlaps `partner` (at `partner_pose`) by parry's contact
 /// query with a prediction of `margin`, asked as the shape method asks it (a huge box only for
 /// its part near the mover: `geometry::contact_near`), and the contact's normal (world, out of
