@@ -350,7 +350,9 @@ impl Reconstructor {
             // the way left are probed too. The samples themselves are all still tested.
             let mut t = tau_b;
             for _ in 0..MAX_ADVANCES {
-                let Some(d) = gap(self, t).filter(|_| advance) else {
+                // (The hulls' gap is asked only while it advances: a hull that holds the other
+                // mesh, such as a bumpy floor's, reads zero at every pose.)
+                let Some(d) = advance.then(|| gap(self, t)).flatten() else {
                     advance = false;
                     break;
                 };

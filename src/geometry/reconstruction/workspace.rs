@@ -30,6 +30,12 @@ pub(super) struct Workspace {
     pub(super) near_touches: Vec<(u32, u32, f64)>,
     pub(super) grow: Vec<(u32, u32)>,
     pub(super) warm: [u32; 2],
+    /// A small moving mesh's triangles in the fixed frame and their loosened boxes
+    /// (`penetrating_at`).
+    pub(super) m_tris: Vec<([DVec3; 3], parry3d::bounding_volume::Aabb)>,
+    /// A small moving mesh's triangles' boxes in the fixed frame, centre and half extents
+    /// (`collect_first_touch`).
+    pub(super) m_boxes: Vec<(crate::math::Vector, crate::math::Vector)>,
 }
 
 /// Hashes a packed triangle pair with one multiplication (the keys are already well spread).
