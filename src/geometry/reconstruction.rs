@@ -60,12 +60,14 @@ use parry3d::query::{PointQuery, Ray, RayCast};
 use parry3d::shape::SupportMap;
 use std::cell::Cell;
 
+mod boxes;
 mod convex;
 mod events;
 mod primitives;
 mod walk;
 mod workspace;
 
+use boxes::aabb_overlap_range;
 use convex::*;
 use events::*;
 pub(crate) use primitives::{edge_edge, ray_triangle};

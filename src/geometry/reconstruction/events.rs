@@ -3,13 +3,9 @@
 //! BVHs, with the moving boxes swept along the trajectory, cannot rule out; the first touch,
 //! every touch of the step (for perforation), and the penetration test of a pose.
 
+use super::boxes::{is_small, triangle_boxes, BoxTransform};
 use super::primitives::*;
 use super::*;
-
-/// The most triangles a moving mesh has for [`Reconstructor::penetrating_at`] to test it
-/// triangle by triangle against the fixed BVH's candidates rather than by the two BVHs' joint
-/// descent.
-const SMALL_MOVER_TRIANGLES: usize = 32;
 
 impl Reconstructor {
     /// The largest touch `s` in `[s_min, s_max]` (`-inf` if none), with every event within the
@@ -63,23 +59,12 @@ impl Reconstructor {
                 best.set(found);
             }
         };
-        // A small moving mesh (`SMALL_MOVER_TRIANGLES`): its triangles' own boxes, in the fixed
-        // frame, against the fixed BVH's leaves under their joint sweep, as in
-        // `small_mover_crosses`; a large one by the two BVHs' joint descent.
-        if moving.num_triangles() <= SMALL_MOVER_TRIANGLES && s_min.is_finite() && s_max.is_finite()
-        {
+        // A small moving mesh (`small_mover.rs`): its triangles' own boxes in the fixed frame
+        // against the fixed BVH's leaves under their joint sweep; a large one by the two BVHs'
+        // joint descent.
+        if is_small(moving, s_min, s_max) {
             let mut boxes = std::mem::take(&mut ws.m_boxes);
-            boxes.clear();
-            let mut swept = Aabb::new_invalid();
-            let (a, b) = ((-s_min * fr.u).as_vec3(), (-s_max * fr.u).as_vec3());
-            for idx in moving.indices() {
-                let p = idx.map(|v| moving_pt(ws, moving, fr, v).as_vec3());
-                let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-                let h = (hi - lo) * 0.5 + Vector::splat(2.0 * margin);
-                let c = (lo + hi) * 0.5;
-                swept.merge(&Aabb::new(c - h + a.min(b), c + h + a.max(b)));
-                boxes.push((c, h));
-            }
+            let swept = triangle_boxes(ws, moving, fr, 2.0 * margin, (s_min, s_max), &mut boxes);
             for tf in fbvh.intersect_aabb(&swept) {
                 let Some(nf) = fbvh.leaf_node(tf) else {
                     continue;
@@ -139,35 +124,22 @@ impl Reconstructor {
         };
         let fbvh = fixed.bvh();
         let mbvh = moving.bvh();
-        if moving.num_triangles() <= SMALL_MOVER_TRIANGLES && s_min.is_finite() && s_max.is_finite()
-        {
-            // A small moving mesh: its triangles' own boxes in the fixed frame, swept, against
-            // the fixed BVH's leaves under their joint sweep (as `collect_first_touch`).
-            let mut boxes = std::mem::take(&mut ws.m_tris);
-            boxes.clear();
-            let mut all = Aabb::new_invalid();
-            for idx in moving.indices() {
-                let p = idx.map(|v| moving_pt(ws, moving, fr, v));
-                let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-                let (lo, hi) = (lo.as_vec3(), hi.as_vec3());
-                let bx = Aabb::new(
-                    (lo + a).min(lo + b) - Vector::splat(margin),
-                    (hi + a).max(hi + b) + Vector::splat(margin),
-                );
-                all.merge(&bx);
-                boxes.push((p, bx));
-            }
+        if is_small(moving, s_min, s_max) {
+            // A small moving mesh (`small_mover.rs`), as in `collect_first_touch`.
+            let mut boxes = std::mem::take(&mut ws.m_boxes);
+            let all = triangle_boxes(ws, moving, fr, margin, (s_min, s_max), &mut boxes);
+            let (a, b) = (a.min(b), a.max(b));
             for tf in fbvh.intersect_aabb(&all) {
                 let Some(nf) = fbvh.leaf_node(tf) else {
                     continue;
                 };
-                for (tm, (_, bx)) in boxes.iter().enumerate() {
-                    if bx.intersects(&nf.aabb()) {
+                for (tm, &(c, h)) in boxes.iter().enumerate() {
+                    if Aabb::new(c - h + a, c + h + b).intersects(&nf.aabb()) {
                         ws.pairs.push((tf, tm as u32));
                     }
                 }
             }
-            ws.m_tris = boxes;
+            ws.m_boxes = boxes;
         } else {
             for (tf, tm) in fbvh.leaf_pairs(mbvh, |nf, nm| swept(nm.aabb()).intersects(&nf.aabb()))
             {
@@ -340,7 +312,7 @@ impl Reconstructor {
             }
         }
         let margin = fr.box_margin(fixed, moving);
-        if moving.num_triangles() <= SMALL_MOVER_TRIANGLES {
+        if is_small(moving, 0.0, 0.0) {
             return self.small_mover_crosses(fixed, moving, fr, shift, margin)
                 || self.sample_inside_either(fixed, moving, fr, shift);
         }
@@ -367,53 +339,8 @@ impl Reconstructor {
         self.sample_inside_either(fixed, moving, fr, shift)
     }
 
-    /// Whether a surface triangle of the small mesh `moving` (shifted by `shift`, fixed
-    /// frame) crosses one of `fixed`'s. Its triangles are put in the fixed frame once, one
-    /// query of the fixed BVH with their joint box gives the fixed candidates, and each
-    /// candidate is tried against the moving triangles whose own (exact, loosened by
-    /// `margin`) boxes it meets: the same pairs the two BVHs' joint descent lets through or
-    /// fewer (a moving node's box turned into the fixed frame contains its triangles'), for
-    /// a quarter of the node tests. (A cube turning against an 800-triangle TriMesh floor:
-    /// 200-300 node boxes turned and tested for each pose apart, 8-10 us a test.)
-    fn small_mover_crosses(
-        &mut self,
-        fixed: &TouchMesh,
-        moving: &TouchMesh,
-        fr: &Frame,
-        shift: DVec3,
-        margin: Real,
-    ) -> bool {
-        let mut tris = std::mem::take(&mut self.ws.m_tris);
-        tris.clear();
-        let mut all = Aabb::new_invalid();
-        for idx in moving.indices() {
-            let b = idx.map(|v| moving_pt(&mut self.ws, moving, fr, v) + shift);
-            let (lo, hi) = (b[0].min(b[1]).min(b[2]), b[0].max(b[1]).max(b[2]));
-            let bx = Aabb::new(lo.as_vec3(), hi.as_vec3()).loosened(margin);
-            all.merge(&bx);
-            tris.push((b, bx));
-        }
-        let fbvh = fixed.bvh();
-        let crosses = fbvh.intersect_aabb(&all).any(|tf| {
-            let Some(nf) = fbvh.leaf_node(tf) else {
-                return false;
-            };
-            let a = fixed_tri(fixed, tf);
-            tris.iter().enumerate().any(|(tm, (b, bx))| {
-                bx.intersects(&nf.aabb())
-                    && triangles_cross(
-                        (&a, fixed.flat_sides(tf)),
-                        (b, moving.flat_sides(tm as u32)),
-                        fr.tol,
-                    )
-            })
-        });
-        self.ws.m_tris = tris;
-        crosses
-    }
-
     /// A sample point of each surface inside the other one, when that one is closed.
-    fn sample_inside_either(
+    pub(super) fn sample_inside_either(
         &mut self,
         fixed: &TouchMesh,
         moving: &TouchMesh,
@@ -598,101 +525,6 @@ pub(super) fn pair_events(
         }
     }
     best
-}
-
-/// Moves boxes of the moving tree into the fixed frame and intersects them with boxes of the
-/// fixed tree along the ray, with the rotation matrices and `1/u` computed once per query.
-pub(super) struct BoxTransform {
-    rot: glamx::Mat3,
-    abs_rot: glamx::Mat3,
-    tra: Vector,
-    inv_u: Vector,
-    u: Vector,
-    margin: Real,
-}
-
-impl BoxTransform {
-    pub(super) fn new(pos12: &Pose, u: Vector, margin: Real) -> Self {
-        let rot = glamx::Mat3::from_quat(pos12.rotation);
-        let abs_rot = glamx::Mat3::from_cols(rot.x_axis.abs(), rot.y_axis.abs(), rot.z_axis.abs());
-        Self {
-            rot,
-            abs_rot,
-            tra: pos12.translation,
-            inv_u: u.recip(),
-            u,
-            margin,
-        }
-    }
-
-    /// The interval of `s` over which moving box `nm`, walked back by `s` along `-u`, overlaps
-    /// fixed box `nf` (both loosened by the margin).
-    #[inline]
-    pub(super) fn overlap_interval(&self, nm: &BvhNode, nf: &BvhNode) -> Option<(Real, Real)> {
-        let (mmin, mmax) = (nm.mins(), nm.maxs());
-        let c = self.rot * ((mmin + mmax) * 0.5) + self.tra;
-        let h = self.abs_rot * ((mmax - mmin) * 0.5) + Vector::splat(2.0 * self.margin);
-        self.interval_of(c, h, nf)
-    }
-
-    /// [`BoxTransform::overlap_interval`] of a moving box already in the fixed frame: centre
-    /// `c`, half extents `h` (loosened).
-    #[inline]
-    pub(super) fn interval_of(&self, c: Vector, h: Vector, nf: &BvhNode) -> Option<(Real, Real)> {
-        let (fmin, fmax) = (nf.mins(), nf.maxs());
-        // Need (c - h) - s u <= fmax and (c + h) - s u >= fmin, per axis.
-        let a = (c - h - fmax) * self.inv_u;
-        let b = (c + h - fmin) * self.inv_u;
-        let (mut lo, mut hi) = (Real::NEG_INFINITY, Real::INFINITY);
-        for k in 0..3 {
-            if self.u[k].abs() < 1e-12 {
-                if c[k] - h[k] > fmax[k] || c[k] + h[k] < fmin[k] {
-                    return None;
-                }
-                continue;
-            }
-            let (l, r) = if self.u[k] > 0.0 {
-                (a[k], b[k])
-            } else {
-                (b[k], a[k])
-            };
-            lo = lo.max(l);
-            hi = hi.min(r);
-        }
-        (lo <= hi).then_some((lo, hi))
-    }
-}
-
-/// The interval of `s` over which the moving mesh's box (walked back by `s`) overlaps the fixed
-/// mesh's box.
-pub(super) fn aabb_overlap_range(
-    fixed: &TouchMesh,
-    moving: &TouchMesh,
-    fr: &Frame,
-) -> Option<(f64, f64)> {
-    let f = fixed.local_aabb();
-    let pos12 = fr.pose12();
-    let m = moving.local_aabb().transform_by(&pos12);
-    let pad = fr.tol * 4.0 + 1e-5 * (f.extents().length() as f64).max(1e-12);
-    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-    for k in 0..3 {
-        let (fmn, fmx) = (f.mins[k] as f64 - pad, f.maxs[k] as f64 + pad);
-        let (mmn, mmx) = (m.mins[k] as f64, m.maxs[k] as f64);
-        let uk = fr.u[k];
-        // Need mmn - s uk <= fmx and mmx - s uk >= fmn.
-        if uk.abs() < 1e-15 {
-            if mmn > fmx || mmx < fmn {
-                return None;
-            }
-            continue;
-        }
-        let a = (mmn - fmx) / uk;
-        let b = (mmx - fmn) / uk;
-        let (l, h) = if uk > 0.0 { (a, b) } else { (b, a) };
-        lo = lo.max(l);
-        hi = hi.min(h);
-    }
-    (lo <= hi).then_some((lo, hi))
 }
 
 pub(super) fn moving_pt(ws: &mut Workspace, moving: &TouchMesh, fr: &Frame, v: u32) -> DVec3 {
