@@ -378,22 +378,46 @@ proptest! {
         u in any::<bool>(), yaw in 0.0f32..std::f32::consts::TAU, tilt in 0.0f32..0.4,
         tilt_axis in 0.0f32..std::f32::consts::TAU, x in -0.15f32..0.15, z in -0.15f32..0.15,
     ) {
-        let turn = turned(yaw, tilt, tilt_axis);
-        let (shape, probes) = if u { (u_shape(), u_corners()) } else { jaws() };
-        let lowest = probes.iter().map(|c| (turn * *c).y).fold(f32::MAX, f32::min);
-        let r = press_at(shape, turn, lowest, &probes, (x, z));
-        let tip = probes
-            .iter()
-            .copied()
-            .min_by(|a, b| (turn * *a).y.total_cmp(&(turn * *b).y))
-            .unwrap();
-        let at = r.world.colliders[r.tool].position().transform_point(tip);
-        if u {
-            check(&r, inside_u(&r), &[(at.x, at.z)], "U");
-        } else {
-            check(&r, inside_of(&r), &[(at.x, at.z)], "jaws");
-        }
+        tilted_tool_holds(u, (yaw, tilt, tilt_axis), (x, z));
     }
+}
+
+/// The U (`u`) or the jaws, turned by `yaw` about the vertical and tilted by `tilt` about a
+/// horizontal axis `tilt_axis` from x, pressed over `(x, z)`: the property test's checks.
+fn tilted_tool_holds(u: bool, (yaw, tilt, tilt_axis): (f32, f32, f32), (x, z): (f32, f32)) {
+    let turn = turned(yaw, tilt, tilt_axis);
+    let (shape, probes) = if u { (u_shape(), u_corners()) } else { jaws() };
+    let lowest = probes
+        .iter()
+        .map(|c| (turn * *c).y)
+        .fold(f32::MAX, f32::min);
+    let r = press_at(shape, turn, lowest, &probes, (x, z));
+    let tip = probes
+        .iter()
+        .copied()
+        .min_by(|a, b| (turn * *a).y.total_cmp(&(turn * *b).y))
+        .unwrap();
+    let at = r.world.colliders[r.tool].position().transform_point(tip);
+    if u {
+        check(&r, inside_u(&r), &[(at.x, at.z)], "U");
+    } else {
+        check(&r, inside_of(&r), &[(at.x, at.z)], "jaws");
+    }
+}
+
+/// Known failure, kept ignored: a case the property test above found at 64 cases with
+/// `PROPTEST_RNG_SEED=5101` (also on the code before stop 60). The U legs down, turned 1.88 rad
+/// and tilted 0.027 rad, pressed 0.18 m from the 1 m plate's centre: at step 33 a leg's corner
+/// is 26 um under the deformed surface (the check allows 10 um; the cells are 62.5 mm). Not
+/// traced.
+#[test]
+#[ignore = "known failure: a tilted U's corner 26 um under the surface"]
+fn a_tilted_u_keeps_its_corners_out() {
+    tilted_tool_holds(
+        true,
+        (1.883_303_6, 0.027_200_622, 2.338_692),
+        (0.123_035_5, -0.134_426_19),
+    );
 }
 
 #[test]
