@@ -11,8 +11,8 @@
 //! or fewer (a node's box turned into the fixed frame contains its triangles'). Kept because a
 //! bench shows it wins: a cube's penetration test against that floor 6.8 -> 3.9 us (the
 //! bisection of its rotating path 55 -> 28 us a reconstruction), the scene's touch step
-//! 1.53-1.56x -> 1.48-1.50x vanilla rapier (`stress_scenes 300 trimesh_floor`, alternated
-//! binaries).
+//! 1.49-1.52x -> 1.46-1.47x vanilla rapier and the CCD scene's 3.61-3.72x -> 3.53-3.64x
+//! (`stress_scenes`, alternated binaries).
 
 use super::events::{fixed_tri, moving_pt};
 use super::primitives::triangles_cross;
@@ -22,10 +22,15 @@ use super::*;
 /// The most triangles a moving mesh has to be tested triangle by triangle.
 pub(super) const SMALL_MOVER_TRIANGLES: usize = 32;
 
+/// Whether `moving` is tested triangle by triangle at a pose.
+pub(super) fn is_small_mesh(moving: &TouchMesh) -> bool {
+    moving.num_triangles() <= SMALL_MOVER_TRIANGLES
+}
+
 /// Whether `moving` is tested triangle by triangle over walks `s` in `[s_min, s_max]` (both
 /// finite: its sweep is a box).
 pub(super) fn is_small(moving: &TouchMesh, s_min: f64, s_max: f64) -> bool {
-    moving.num_triangles() <= SMALL_MOVER_TRIANGLES && s_min.is_finite() && s_max.is_finite()
+    is_small_mesh(moving) && s_min.is_finite() && s_max.is_finite()
 }
 
 /// The boxes of `moving`'s triangles at frame `fr` (fixed frame), as centre and half extents

@@ -3,7 +3,7 @@
 //! BVHs, with the moving boxes swept along the trajectory, cannot rule out; the first touch,
 //! every touch of the step (for perforation), and the penetration test of a pose.
 
-use super::boxes::{is_small, triangle_boxes, BoxTransform};
+use super::boxes::{is_small, is_small_mesh, triangle_boxes, BoxTransform};
 use super::primitives::*;
 use super::*;
 
@@ -59,7 +59,7 @@ impl Reconstructor {
                 best.set(found);
             }
         };
-        // A small moving mesh (`small_mover.rs`): its triangles' own boxes in the fixed frame
+        // A small moving mesh (`boxes.rs`): its triangles' own boxes in the fixed frame
         // against the fixed BVH's leaves under their joint sweep; a large one by the two BVHs'
         // joint descent.
         if is_small(moving, s_min, s_max) {
@@ -125,7 +125,7 @@ impl Reconstructor {
         let fbvh = fixed.bvh();
         let mbvh = moving.bvh();
         if is_small(moving, s_min, s_max) {
-            // A small moving mesh (`small_mover.rs`), as in `collect_first_touch`.
+            // A small moving mesh (`boxes.rs`), as in `collect_first_touch`.
             let mut boxes = std::mem::take(&mut ws.m_boxes);
             let all = triangle_boxes(ws, moving, fr, margin, (s_min, s_max), &mut boxes);
             let (a, b) = (a.min(b), a.max(b));
@@ -312,7 +312,7 @@ impl Reconstructor {
             }
         }
         let margin = fr.box_margin(fixed, moving);
-        if is_small(moving, 0.0, 0.0) {
+        if is_small_mesh(moving) {
             return self.small_mover_crosses(fixed, moving, fr, shift, margin)
                 || self.sample_inside_either(fixed, moving, fr, shift);
         }
