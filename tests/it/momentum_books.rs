@@ -306,15 +306,26 @@ proptest! {
             spin,
         );
         prop_assume!(moved);
-        prop_assert!(
-            (p1 - p0).length() <= 1e-4 * p0.length(),
-            "momentum {p0:?} -> {p1:?}"
-        );
-        prop_assert!(
-            kinetic <= e0 * (1.0 + 1e-4) && total <= e0 * (1.0 + 1e-4),
-            "energy {e0} J -> kinetic up to {kinetic} J, with the springs {total} J"
-        );
+        books_kept((p0, p1), e0, (kinetic, total)).map_err(TestCaseError::fail)?;
     }
+}
+
+/// The books of a body thrown at a free plate ([`thrown`]): the momentum within 1e-4 of where
+/// it started (single precision), the energy (kinetic, and with the springs') never above.
+fn books_kept(
+    (p0, p1): (Vector, Vector),
+    e0: f64,
+    (kinetic, total): (f64, f64),
+) -> Result<(), String> {
+    if (p1 - p0).length() > 1e-4 * p0.length() {
+        return Err(format!("momentum {p0:?} -> {p1:?}"));
+    }
+    if kinetic > e0 * (1.0 + 1e-4) || total > e0 * (1.0 + 1e-4) {
+        return Err(format!(
+            "energy {e0} J -> kinetic up to {kinetic} J, with the springs {total} J"
+        ));
+    }
+    Ok(())
 }
 
 /// A case the property test above found at 96 cases with `PROPTEST_RNG_SEED=5102` (on the
@@ -338,14 +349,7 @@ fn a_light_spinning_cube_stores_no_energy_it_has_not_paid_for() {
         -3.637_803_8,
     );
     assert!(moved);
-    assert!(
-        (p1 - p0).length() <= 1e-4 * p0.length(),
-        "momentum {p0:?} -> {p1:?}"
-    );
-    assert!(
-        kinetic <= e0 * (1.0 + 1e-4) && total <= e0 * (1.0 + 1e-4),
-        "energy {e0} J -> kinetic up to {kinetic} J, with the springs {total} J"
-    );
+    books_kept((p0, p1), e0, (kinetic, total)).unwrap();
 }
 
 /// Three cases the property test above found (seeds 2 and 5), where a dynamic tool's points
