@@ -56,8 +56,10 @@ pub(crate) fn push_out_bodies(
     body_pose: &Pose,
     h: Real,
 ) -> bool {
-    // The depth contact `c` (`i`) of tool `d` asks the shift to take off.
-    let asked = |i: usize, c: &SurfaceContact, d: &DynamicTool| {
+    // The depth contact `c` (`i`) asks the shift to take off; `fed`: how far the tool's fall
+    // over the substep drove its point in (`fed_approach`); `tool_inverse`: the tool's inverse
+    // effective mass along the contact's normal at its point (its row's diagonal, below).
+    let asked = |i: usize, c: &SurfaceContact, fed: Real, tool_inverse: Real| {
         let weights = c.weights();
         if weights
             .iter()
@@ -77,36 +79,34 @@ pub(crate) fn push_out_bodies(
         // what a plastic impact at the touch would have carried it along since: the tool's
         // share of the two effective masses (`tool_share`).
         let made = c.depth.min(approach);
-        let fed = made.min(fed_approach(c, d, body_pose, h));
-        c.depth - fed - tool_share(c, d, surface, body_pose) * (made - fed)
+        let fed = made.min(fed);
+        c.depth - fed - tool_share(c, surface, tool_inverse) * (made - fed)
     };
     let mut moved = false;
     for (j, d) in dynamic.iter_mut().enumerate() {
-        let mine: Vec<(usize, Real)> = (0..contacts.len().min(owners.len()))
-            .filter(|&i| owners[i].holder == Some(j))
-            .map(|i| (i, asked(i, &contacts[i], d)))
-            .collect();
-        if !mine.iter().any(|&(_, depth)| depth > 0.0) {
-            continue;
-        }
         let centre = d.centre();
-        // Each contact's row (world): the tool's point must move by at least `depth` against
-        // the normal: -(δt · n + δθ · (r × n)) ≥ depth.
-        let rows: Vec<(Vector, Vector, Real, Real)> = mine
-            .iter()
-            .map(|&(i, depth)| {
+        // Each of its contacts' row (world): the tool's point must move by at least `depth`
+        // against the normal: -(δt · n + δθ · (r × n)) ≥ depth; its diagonal, the tool's
+        // inverse effective mass along the normal at the point.
+        let rows: Vec<(usize, Vector, Vector, Real, Real)> = (0..contacts.len().min(owners.len()))
+            .filter(|&i| owners[i].holder == Some(j))
+            .map(|i| {
                 let c = &contacts[i];
                 let n = body_pose.rotation * c.normal;
                 let r = body_pose.transform_point(c.point) - centre;
                 let (lin, ang) = (-n, -r.cross(n));
                 let diag = lin.dot(d.inverse_mass * lin) + ang.dot(d.inverse_inertia * ang);
-                (lin, ang, depth, diag)
+                let depth = asked(i, c, fed_approach(d, n, r, h), diag);
+                (i, lin, ang, depth, diag)
             })
             .collect();
+        if !rows.iter().any(|&(_, _, _, depth, _)| depth > 0.0) {
+            continue;
+        }
         let (mut shift, mut turn) = (Vector::ZERO, Vector::ZERO);
         let mut lambda = vec![0.0; rows.len()];
         for _ in 0..SWEEPS {
-            for (l, &(lin, ang, depth, diag)) in lambda.iter_mut().zip(&rows) {
+            for (l, &(_, lin, ang, depth, diag)) in lambda.iter_mut().zip(&rows) {
                 if !diag.is_finite() || diag <= 0.0 {
                     continue;
                 }
@@ -129,7 +129,7 @@ pub(crate) fn push_out_bodies(
         d.touched = true;
         moved = true;
         let to_surface = body_pose.inverse();
-        for (&(i, _), &(lin, ang, _, _)) in mine.iter().zip(&rows) {
+        for &(i, lin, ang, _, _) in &rows {
             let c = &mut contacts[i];
             let p = body_pose.transform_point(c.point);
             let p = new_centre + rotation * (p - centre);
@@ -141,32 +141,21 @@ pub(crate) fn push_out_bodies(
 }
 
 /// How far the accelerations rapier's step fed tool `d` over the substep `h` (gravity, the
-/// user's forces: [`DynamicTool::fall`]) drove its point at contact `c` in along the contact's
-/// normal.
-fn fed_approach(c: &SurfaceContact, d: &DynamicTool, body_pose: &Pose, h: Real) -> Real {
-    let n = body_pose.rotation * c.normal;
-    let r = body_pose.transform_point(c.point) - d.centre();
+/// user's forces: [`DynamicTool::fall`]) drove its point at arm `r` from its centre of mass in
+/// along the contact's normal `n` (world).
+fn fed_approach(d: &DynamicTool, n: Vector, r: Vector, h: Real) -> Real {
     let a = d.acceleration + d.angular_acceleration.cross(r);
     (h * h * a.dot(n)).max(0.0)
 }
 
 /// The share of a contact's depth made by its tool's approach that the surface's point keeps:
 /// after a plastic impact at the touch, tool and point move on together at the tool's share of
-/// their momentum, its effective mass along the contact's normal at its point over the sum of
-/// it and the point's (`1 / Σ wⱼ² / mⱼ`). A tool far heavier than the point presses it as far
+/// their momentum, its effective mass along the contact's normal at its point (the inverse of
+/// `tool_inverse`) over the sum of it and the point's (`1 / Σ wⱼ² / mⱼ`). A tool far heavier than the point presses it as far
 /// as it came (a dumbbell resting on a plate); a light one carries it by little (a 2.3 g cube
 /// spinning onto a plate of 6 g vertices) and is moved out of the rest. 1 where either mass is
 /// not finite and positive.
-fn tool_share(
-    c: &SurfaceContact,
-    d: &DynamicTool,
-    surface: &MassSpringSurface,
-    body_pose: &Pose,
-) -> Real {
-    let n = body_pose.rotation * c.normal;
-    let r = body_pose.transform_point(c.point) - d.centre();
-    let arm = r.cross(n);
-    let tool_inverse = n.dot(d.inverse_mass * n) + arm.dot(d.inverse_inertia * arm);
+fn tool_share(c: &SurfaceContact, surface: &MassSpringSurface, tool_inverse: Real) -> Real {
     let point_inverse: Real = c
         .weights()
         .iter()
