@@ -36,6 +36,10 @@ pub(super) struct Pressed {
     /// The impulse the tool gave the point along its tangent plane through that step (N·s,
     /// friction), filled in by [`record_impulses`].
     pub tangent_impulse: Vector,
+    /// What the step gave, through the point, vertices the tools hold on a sliding hold,
+    /// across that hold's normal (N·s, [`MassSpringSurface::point_held_across`]), filled in by
+    /// [`record_impulses`].
+    pub held_across: Vector,
     /// The momentum the hold gave the surface's vertices by its press (the velocity change,
     /// booked in the substep it happened in).
     pub pressed_momentum: Vector,
@@ -61,6 +65,7 @@ pub(super) fn record_impulses(surface: &MassSpringSurface, pressed: &mut [Presse
     for p in pressed {
         p.impulse = surface.point_impulse(p.id).unwrap_or(0.0);
         p.tangent_impulse = surface.point_tangent_impulse(p.id).unwrap_or(Vector::ZERO);
+        p.held_across = surface.point_held_across(p.id).unwrap_or(Vector::ZERO);
         p.momentum = surface.point_momentum(p.id).unwrap_or(Vector::ZERO);
     }
 }
@@ -88,7 +93,9 @@ pub(super) fn reaction_of(
         return (force, moment, count);
     }
     for p in pressed.iter().filter(|p| p.tool == tool) {
-        if p.impulse != 0.0 {
+        // (A point all on held vertices reports no impulse of its own, but may have moved
+        // them across their holds.)
+        if p.impulse != 0.0 || p.held_across != Vector::ZERO {
             let f = p.force_on_tool(h);
             force += f;
             moment += p.point.cross(f);
@@ -101,7 +108,7 @@ pub(super) fn reaction_of(
 impl Pressed {
     /// The force the point put on the tool through the step (`h` long).
     fn force_on_tool(&self, h: Real) -> Vector {
-        -(self.normal * self.impulse + self.tangent_impulse) / h
+        -(self.normal * self.impulse + self.tangent_impulse + self.held_across) / h
     }
 }
 
@@ -229,6 +236,7 @@ pub(super) fn press_all(
             point: c.point,
             impulse: 0.0,
             tangent_impulse: Vector::ZERO,
+            held_across: Vector::ZERO,
             pressed_momentum: surface.point_momentum(id).unwrap_or(Vector::ZERO),
             momentum: Vector::ZERO,
         });

@@ -576,7 +576,12 @@ pub(super) fn constrain(
             }
         }
     }
-    let impulse = book_impulses((&list, &cons, &lambda), free, points, hold_impulse);
+    let impulse = book_impulses(
+        (&list, &cons, &lambda),
+        (free, held, held_normal),
+        points,
+        hold_impulse,
+    );
     filter.add_impulses(&list, &impulse, dv);
     give_impulses(&holder_rows, &lambda, holders);
     impulse.iter().sum()

@@ -38,6 +38,11 @@ pub(crate) struct PointHold {
     /// The weight on vertices held when it was pressed: their holders keep them where they
     /// are, so that share of its impulses goes into them, not into the surface.
     pub(super) held_share: f64,
+    /// The part of the step's impulses on the vertices a sliding hold holds (their share of
+    /// this point's rows, where the row moves them) across that hold's normal. Their holds
+    /// take only the part along it, and the tool's force reads their springs along it
+    /// ([`MassSpringSurface::point_held_across`]): this part is the point's.
+    pub(super) held_across: DVec3,
     /// Its rigid holder ([`super::rigid_holder`]), and the holder's point that presses (from
     /// the holder's centre once pressed; where it was given until then). With a holder, `min_velocity` and `carried` are relative to
     /// the holder's velocity at that point, which the solve takes after the step.

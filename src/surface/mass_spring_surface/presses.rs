@@ -444,6 +444,7 @@ impl MassSpringSurface {
             tangent_impulse: DVec3::ZERO,
             momentum: DVec3::ZERO,
             held_share: 0.0,
+            held_across: DVec3::ZERO,
             holder: p.holder.map(|(k, point)| (k, point.as_dvec3())),
         };
         for (k, &(v, w)) in vertices.iter().enumerate() {

@@ -405,14 +405,46 @@ fn tilted_tool_holds(u: bool, (yaw, tilt, tilt_axis): (f32, f32, f32), (x, z): (
     }
 }
 
-/// Known failure, kept ignored: a case the property test above found at 64 cases with
-/// `PROPTEST_RNG_SEED=5103` (also on the code before stop 60). The U legs down, turned 1.44 rad
-/// and tilted 0.174 rad (10 degrees), pressed 0.11 m from the plate's centre: at rest the
-/// tool's reaction and the pins' differ by 0.56 N, mostly across, 8.7 % of the 6.4 N press
-/// (the check allows 5 %): the tool reads (0.41, 6.39, 0.04) N, the pins (-0.45, -6.51, 0.50)
-/// N. Not traced.
+/// The U legs down, turned 1.44 rad and tilted 0.174 rad (10 degrees), pressed 0.11 m from the
+/// plate's centre (`PROPTEST_RNG_SEED=5103` of the property test above, at 64 cases).
+fn u_tilted_ten_degrees() -> Pressed {
+    let turn = turned(1.440_278_9, 0.174_212_35, 5.964_453);
+    let probes = u_corners();
+    let lowest = probes
+        .iter()
+        .map(|c| (turn * *c).y)
+        .fold(f32::MAX, f32::min);
+    press_at(
+        u_shape(),
+        turn,
+        lowest,
+        &probes,
+        (-0.047_794_826, 0.102_089_81),
+    )
+}
+
+/// At rest the U tilted 10 degrees reads the force the pins hold (within 5 %). Its leg's face
+/// holds a surface vertex on a sliding hold, and the tool's edges press points of the triangles
+/// round it, their normals about 10 degrees off the face's: the solve moved that vertex with
+/// the points' rows, and the hold took only the part along its normal. The tool's force, which
+/// reads a held vertex's springs along its hold's normal and leaves a held vertex's share out
+/// of the points' impulses, lost the rest: it read (0.41, 6.39, 0.04) N for the pins' (0.45,
+/// 6.51, -0.50) N, 8.7 % of the press off. Now the points also report what their rows gave
+/// held vertices across their holds' normals (`MassSpringSurface::point_held_across`).
 #[test]
-#[ignore = "known failure: a U tilted 10 degrees reads 9 % off the pins' balance"]
+fn a_u_tilted_ten_degrees_reads_the_pins_force() {
+    balances_the_pins(&u_tilted_ten_degrees(), 0.05, "U tilted 10 degrees");
+}
+
+/// Known failure, kept ignored: the same U ([`u_tilted_ten_degrees`]), which now balances the
+/// pins, has free vertices 6-9 cm from it that are not at rest with the springs: vertex 192,
+/// 89 mm from the tool, holds still under a 0.10 N spring force (the check allows 1.6 % of
+/// that). A point of the leg's edge has 96 % of its weight on the vertex the leg's face holds:
+/// each substep its press moves the free vertex of its edge by its depth over that weight,
+/// through the filter's columns as far as vertex 192, and the step's springs pull them back: a
+/// cycle at rest, not an equilibrium.
+#[test]
+#[ignore = "known failure: a U tilted 10 degrees keeps free vertices off their springs' rest"]
 fn a_u_tilted_ten_degrees_balances_the_pins() {
     tilted_tool_holds(
         true,

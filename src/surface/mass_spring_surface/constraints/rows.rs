@@ -261,25 +261,38 @@ pub(super) fn surface_independent(
 /// impulses and momentum or its held vertex's hold impulse (`hold_impulse`, by vertex).
 pub(super) fn book_impulses(
     (list, cons, lambda): (&[u32], &[Con], &[f64]),
-    free: &[u32],
+    (free, held, held_normal): (&[u32], &[bool], &[DVec3]),
     points: &mut [PointHold],
     hold_impulse: &mut [DVec3],
 ) -> Vec<DVec3> {
     let mut impulse = vec![DVec3::ZERO; list.len()];
     for (c, (d, e, n, row)) in cons.iter().enumerate() {
         let mut weight = 0.0;
+        // What the row gave vertices a sliding hold holds, across that hold's normal
+        // ([`PointHold::held_across`]).
+        let mut across = DVec3::ZERO;
         for &(k, w) in &e[..*n] {
-            impulse[k] += *d * (w * lambda[c]);
+            let given = *d * (w * lambda[c]);
+            impulse[k] += given;
             weight += w;
+            let v = list.get(k).and_then(|&fi| free.get(fi as usize));
+            if let Some(&v) = v.filter(|&&v| held.get(v as usize) == Some(&true)) {
+                let m = held_normal.get(v as usize).copied().unwrap_or(DVec3::ZERO);
+                if m != DVec3::ZERO {
+                    across += given - m * m.dot(given);
+                }
+            }
         }
         match *row {
             Row::Normal(pi) => {
                 points[pi].impulse += lambda[c];
                 points[pi].momentum += *d * (weight * lambda[c]);
+                points[pi].held_across += across;
             }
             Row::Tangent(pi) => {
                 points[pi].tangent_impulse += *d * lambda[c];
                 points[pi].momentum += *d * (weight * lambda[c]);
+                points[pi].held_across += across;
             }
             Row::Vertex => {
                 // The vertex hold's impulse (`MassSpringSurface::hold_impulse`).
