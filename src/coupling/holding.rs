@@ -18,6 +18,7 @@ use crate::geometry::tool_boundary::distance_outside;
 use crate::geometry::{SurfaceContact, TrianglesRound};
 use crate::math::{Pose, Real, Vector};
 use crate::surface::MassSpringSurface;
+use glamx::DVec3;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::geometry::ColliderHandle;
 use rapier3d::pipeline::PhysicsWorld;
@@ -164,7 +165,7 @@ pub(super) fn surface_substep(
     given.extend(
         s.held_by
             .iter()
-            .map(|&(v, tool)| (tool, s.surface.hold_impulse(v))),
+            .map(|&(v, tool)| (tool, s.surface.hold_impulse_f64(v))),
     );
     // (The tools' list is copied only to change the dynamic ones' motions.)
     let moved;
@@ -191,6 +192,10 @@ pub(super) fn surface_substep(
     s.surface.positions_into(&mut s.scratch);
     s.search.refresh(&mut s.surface, &s.scratch, &s.before);
     let mut out = Vec::with_capacity(tools.len());
+    // Each kinematic tool's books over the substep (the momentum it gave the surface, in
+    // double precision: see `Pressed::pressed_momentum`), its reaction's `mean_force` once
+    // its presses are in; `None` for a dynamic tool, whose reaction has its own.
+    let mut books: Vec<Option<DVec3>> = Vec::with_capacity(tools.len());
     let mut now_held = Vec::new();
     s.held_by.clear();
     // The dynamic tools' vertex contacts, pressed with the sharp features' below.
@@ -231,6 +236,7 @@ pub(super) fn surface_substep(
                 ),
             );
             out.push((t.handle, reaction, Vec::new()));
+            books.push(None);
             continue;
         }
         let pose = inv * t.end;
@@ -269,13 +275,11 @@ pub(super) fn surface_substep(
             .iter()
             .filter(|g| g.0 == t.handle)
             .map(|g| g.1)
-            .sum::<Vector>()
+            .sum::<DVec3>()
             + holds.given;
-        let mean_force = if h > 0.0 {
-            body_pose.rotation * -((held_given + momentum_of(&s.last_pressed, t.handle)) / h)
-        } else {
-            world_force
-        };
+        books.push((h > 0.0).then(|| held_given + momentum_of(&s.last_pressed, t.handle)));
+        // (Set from the books at the end of the substep, `mean_force_of`.)
+        let mean_force = world_force;
         let centre = tool
             .parent()
             .and_then(|b| world.bodies.get(b))
@@ -370,15 +374,14 @@ pub(super) fn surface_substep(
             &mut s.pressed,
         );
         // The presses' velocity changes are the tools' impulses in this substep.
-        if h > 0.0 {
-            for (handle, reaction, _) in out.iter_mut() {
-                let given = s
+        for ((handle, _, _), book) in out.iter().zip(books.iter_mut()) {
+            if let Some(book) = book {
+                *book += s
                     .pressed
                     .iter()
                     .filter(|p| p.tool == *handle)
                     .map(|p| p.pressed_momentum)
-                    .sum::<Vector>();
-                reaction.mean_force -= body_pose.rotation * (given / h);
+                    .sum::<DVec3>();
             }
         }
         let new = ..first_grasped.min(ids.len());
@@ -390,7 +393,18 @@ pub(super) fn surface_substep(
             &ids[new],
         );
     }
+    for ((_, reaction, _), book) in out.iter_mut().zip(&books) {
+        if let Some(book) = book {
+            reaction.mean_force = mean_force_of(*book, body_pose, h);
+        }
+    }
     out
+}
+
+/// A kinematic tool's mean force over a substep (`h` long, world frame) from its books: the
+/// reverse of the momentum it gave the surface (surface frame, on the body at `body_pose`).
+fn mean_force_of(given: DVec3, body_pose: &Pose, h: Real) -> Vector {
+    body_pose.rotation * -(given / f64::from(h)).as_vec3()
 }
 
 /// A held vertex moves through the next step as a pin with the velocity its holder gave it in
@@ -407,7 +421,7 @@ fn retarget_holds(
     tools: &[ToolMotion],
     inv: &Pose,
     h: Real,
-) -> Vec<(ColliderHandle, Vector)> {
+) -> Vec<(ColliderHandle, DVec3)> {
     let mut given = Vec::new();
     if h <= 0.0 {
         return given;
@@ -465,7 +479,7 @@ fn retarget_holds(
             own - n * own.dot(n) + n * tool_velocity.dot(n)
         };
         if surface.set_state(i, p, v).is_ok() {
-            given.push((*tool, (v - own) * surface.mass(i)));
+            given.push((*tool, ((v - own) * surface.mass(i)).as_dvec3()));
         }
     }
     given

@@ -18,6 +18,7 @@ use crate::geometry::{
 };
 use crate::math::{Pose, Real, Vector};
 use crate::surface::{MassSpringSurface, PointPress, Tangential};
+use glamx::DVec3;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use rapier3d::geometry::ColliderHandle;
 
@@ -41,11 +42,13 @@ pub(super) struct Pressed {
     /// [`record_impulses`].
     pub held_across: Vector,
     /// The momentum the hold gave the surface's vertices by its press (the velocity change,
-    /// booked in the substep it happened in).
-    pub pressed_momentum: Vector,
+    /// booked in the substep it happened in). Its books are kept in double precision, as the
+    /// surface keeps them: a tool twisting a plate presses with momenta tens of times the
+    /// plate's net change, and their single-precision sums drifted off it.
+    pub pressed_momentum: DVec3,
     /// The momentum it gave by the press and the step after it
     /// ([`MassSpringSurface::point_momentum`]), filled in by [`record_impulses`].
-    pub momentum: Vector,
+    pub momentum: DVec3,
 }
 
 /// The tool a contact belongs to, as [`press_all`] needs it.
@@ -66,14 +69,14 @@ pub(super) fn record_impulses(surface: &MassSpringSurface, pressed: &mut [Presse
         p.impulse = surface.point_impulse(p.id).unwrap_or(0.0);
         p.tangent_impulse = surface.point_tangent_impulse(p.id).unwrap_or(Vector::ZERO);
         p.held_across = surface.point_held_across(p.id).unwrap_or(Vector::ZERO);
-        p.momentum = surface.point_momentum(p.id).unwrap_or(Vector::ZERO);
+        p.momentum = surface.point_momentum_f64(p.id).unwrap_or(DVec3::ZERO);
     }
 }
 
 /// The momentum `tool`'s points gave the surface in the step just taken (surface frame): the
 /// step's impulses on them (their presses' velocity changes were booked when they were
 /// pressed, [`press_all`]).
-pub(super) fn momentum_of(pressed: &[Pressed], tool: ColliderHandle) -> Vector {
+pub(super) fn momentum_of(pressed: &[Pressed], tool: ColliderHandle) -> DVec3 {
     pressed
         .iter()
         .filter(|p| p.tool == tool)
@@ -237,8 +240,8 @@ pub(super) fn press_all(
             impulse: 0.0,
             tangent_impulse: Vector::ZERO,
             held_across: Vector::ZERO,
-            pressed_momentum: surface.point_momentum(id).unwrap_or(Vector::ZERO),
-            momentum: Vector::ZERO,
+            pressed_momentum: surface.point_momentum_f64(id).unwrap_or(DVec3::ZERO),
+            momentum: DVec3::ZERO,
         });
     }
     ids

@@ -27,7 +27,7 @@ pub(super) struct Holds {
     pub contacts: Vec<(Vector, Vector)>,
     /// The momentum the tool gave the vertices it took hold of, kept or let go (their velocity
     /// changes times their masses; surface frame).
-    pub given: Vector,
+    pub given: glamx::DVec3,
 }
 
 /// Moves every surface vertex the tool contains out of it and holds it there (see [`Holds`]).
@@ -213,7 +213,7 @@ pub(super) fn hold_vertices(
         sticking: 0,
         vertices: Vec::new(),
         contacts: Vec::new(),
-        given: Vector::ZERO,
+        given: glamx::DVec3::ZERO,
     };
     // A vertex moving over the tool slower than this (a millionth of the tool's size per
     // substep) is at rest on it.
@@ -278,7 +278,7 @@ pub(super) fn hold_vertices(
     }
     out.given = held
         .iter()
-        .map(|&(i, .., before)| (surface.velocity(i) - before) * surface.mass(i))
+        .map(|&(i, .., before)| ((surface.velocity(i) - before) * surface.mass(i)).as_dvec3())
         .sum();
     // This tool's contacts end where it let the vertex go.
     sticks.retain(|v, s| s.0 != tool || surface.is_held(*v) && held.iter().any(|h| h.0 == *v));

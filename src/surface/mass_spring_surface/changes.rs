@@ -233,9 +233,16 @@ impl MassSpringSurface {
     /// assert!((surface.momentum() - before - given).length() < 1e-5);
     /// ```
     pub fn hold_impulse(&self, i: u32) -> Vector {
+        self.hold_impulse_f64(i).as_vec3()
+    }
+    /// [`MassSpringSurface::hold_impulse`] as the surface keeps it (double precision), for
+    /// books that sum many of them ([`crate::coupling`]: a tool twisting a plate holds vertices
+    /// with impulses tens of times the plate's net momentum change).
+    pub(crate) fn hold_impulse_f64(&self, i: u32) -> glamx::DVec3 {
         self.hold_impulse
             .get(i as usize)
-            .map_or(Vector::ZERO, |j| j.as_vec3())
+            .copied()
+            .unwrap_or(glamx::DVec3::ZERO)
     }
     /// The normal a sliding hold on vertex `i` supports; zero for a full hold, a vertex not
     /// held, or one out of range.

@@ -52,7 +52,13 @@ impl MassSpringSurface {
     /// assert!(given.y < pressed.y); // it kept pushing the point down through the step
     /// ```
     pub fn point_momentum(&self, id: usize) -> Option<Vector> {
-        self.point_holds.get(id).map(|h| h.momentum.as_vec3())
+        self.point_momentum_f64(id).map(|m| m.as_vec3())
+    }
+
+    /// [`MassSpringSurface::point_momentum`] in double precision (as
+    /// [`MassSpringSurface::hold_impulse_f64`]).
+    pub(crate) fn point_momentum_f64(&self, id: usize) -> Option<glamx::DVec3> {
+        self.point_holds.get(id).map(|h| h.momentum)
     }
 
     /// The impulse (N·s, in its tangent plane) the holder of hold `id` of
