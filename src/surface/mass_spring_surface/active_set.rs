@@ -196,7 +196,7 @@ const COUPLED: f64 = 1e-2;
 /// leave it violated (its target differs from what their combination gives it: a flat face
 /// on a few triangles, pressed at more points than the triangles have vertices, with normals
 /// a little apart), the factor's answer lets it through. A jaw resting flat on a coarse plate
-/// (`tests/it/tool_shapes.rs`) had a corner row left out that way at a substep, its point
+/// (`tests/it/tool_shapes/tilted.rs`) had a corner row left out that way at a substep, its point
 /// rising 0.12 mm into the jaw; pressed back at the next, it pushed the triangle down under
 /// the other corners, which lost their rows: the face see-sawed at rest, its force swinging
 /// 9.7-11.0 N about the pins' 10.4 N. Such rows, with the rows coupled to them
