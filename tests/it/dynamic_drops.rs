@@ -437,3 +437,20 @@ fn a_heavy_u_in_a_funnel_keeps_the_contacts_round_its_legs_edges() {
 fn a_ball_asleep_on_the_plate_is_carried() {
     check_drawn(Body::Ball, -1.7505054, 0.10967081, 2.9173326, false).unwrap();
 }
+
+/// Known failure, kept ignored: a case the property test above found at four times its cases
+/// (`PROPTEST_RNG_SEED=5111`; also on the code before stop 61). A 7.4 kg U dropped 1.18 m onto
+/// a plate of 23.7 N/m edges, 17 substeps, sinks 0.5 m into the 1 m plate (its 62.5 mm cells
+/// stretched several times) and rests on 6-15 points of its legs' edges and corners, no vertex
+/// held. From the 85th step it turns about the plate's horizontal z axis, 0.4 rad/s and then
+/// 5.1 rad/s by the 100th, tips into the funnel, and at the 174th step, its points down to none,
+/// passes through the plate. It is not only toppling: the U's kinetic and potential energy and
+/// the plate's together rise by 0.20 J between the 92nd and the 100th step and by 2.35 J
+/// between the 112th and the 116th (the property's check of the first rebound does not see a
+/// body that came to rest first). Not traced further: which contacts give the energy, and
+/// where the points were lost.
+#[test]
+#[ignore = "known failure: a heavy U tipping in a deep funnel of a very soft plate goes through"]
+fn a_heavy_u_tipping_in_a_deep_funnel_stays_on_the_plate() {
+    check_drawn(Body::U, 0.866_664_5, 1.184_714_1, 1.374_012_2, true).unwrap();
+}
