@@ -447,8 +447,10 @@ fn a_ball_asleep_on_the_plate_is_carried() {
 /// passes through the plate. It is not only toppling: the U's kinetic and potential energy and
 /// the plate's together rise by 0.20 J between the 92nd and the 100th step and by 2.35 J
 /// between the 112th and the 116th (the property's check of the first rebound does not see a
-/// body that came to rest first). Not traced further: which contacts give the energy, and
-/// where the points were lost.
+/// body that came to rest first). A first look: while it turns, the push out of its overlap
+/// (`coupling/dynamic_tools/push_out.rs`) moves it at most substeps, up to 1.3 mm up and
+/// 0.03 rad round (the shifts change no velocity, and lifting 7.4 kg by a millimetre is 73 mJ).
+/// Not traced further: which contacts ask those shifts, and where the points were lost.
 #[test]
 #[ignore = "known failure: a heavy U tipping in a deep funnel of a very soft plate goes through"]
 fn a_heavy_u_tipping_in_a_deep_funnel_stays_on_the_plate() {
