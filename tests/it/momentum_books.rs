@@ -50,6 +50,32 @@ struct Run {
     grip: Grip,
 }
 
+impl Run {
+    /// The property test's run from its drawn values: the plate's size, edge stiffness and mass
+    /// as powers of ten, the substeps and the tool's kind, its tilt, spin, pressing speed (a
+    /// power of ten) and drift, and its grip.
+    fn drawn(
+        (scale_exp, k_exp, mass_exp): (f32, f32, f32),
+        (substeps, kind): (u32, u8),
+        (tilt, spin, speed_exp, drift): (f32, f32, f32, f32),
+        grip: Grip,
+    ) -> Run {
+        let size = 10f32.powf(scale_exp);
+        Run {
+            size,
+            k: 10f32.powf(k_exp),
+            mass: 10f32.powf(mass_exp),
+            substeps,
+            shape: tool(kind, size),
+            tilt,
+            spin,
+            speed: 10f32.powf(speed_exp),
+            drift,
+            grip,
+        }
+    }
+}
+
 /// A world with no gravity and, on a fixed body, a free plate (no pins) `size` wide of
 /// `cells` per side, edges of `k` with light dampers, `mass` in all, stepped in `substeps`.
 fn free_plate(
@@ -200,19 +226,12 @@ proptest! {
         drift in -0.5f32..0.5,
         grip in 0u8..3,
     ) {
-        let size = 10f32.powf(scale_exp);
-        let run = Run {
-            size,
-            k: 10f32.powf(k_exp),
-            mass: 10f32.powf(mass_exp),
-            substeps,
-            shape: tool(kind, size),
-            tilt,
-            spin,
-            speed: 10f32.powf(speed_exp),
-            drift,
-            grip: [Grip::Frictionless, Grip::Coulomb, Grip::Grasp][grip as usize],
-        };
+        let run = Run::drawn(
+            (scale_exp, k_exp, mass_exp),
+            (substeps, kind),
+            (tilt, spin, speed_exp, drift),
+            [Grip::Frictionless, Grip::Coulomb, Grip::Grasp][grip as usize],
+        );
         let (plate, reported, largest) = books(&run);
         let miss = (plate + reported).length();
         // Single-precision positions and velocities: a hair of the largest momentum.
@@ -425,24 +444,18 @@ fn a_grasping_tool_twisting_a_plate_keeps_its_books() {
         ),
     ];
     for (scale_exp, k_exp, mass_exp, substeps, kind, tilt, spin, speed_exp, drift) in cases {
-        let size = 10f32.powf(scale_exp);
-        let run = Run {
-            size,
-            k: 10f32.powf(k_exp),
-            mass: 10f32.powf(mass_exp),
-            substeps,
-            shape: tool(kind, size),
-            tilt,
-            spin,
-            speed: 10f32.powf(speed_exp),
-            drift,
-            grip: Grip::Grasp,
-        };
+        let run = Run::drawn(
+            (scale_exp, k_exp, mass_exp),
+            (substeps, kind),
+            (tilt, spin, speed_exp, drift),
+            Grip::Grasp,
+        );
         let (plate, reported, largest) = books(&run);
         let miss = (plate + reported).length();
         assert!(
             largest > 0.0 && miss <= 1e-3 * largest,
-            "{size} m: the plate took {plate:?}, the reaction reports {reported:?} (largest {largest})"
+            "{} m: the plate took {plate:?}, the reaction reports {reported:?} (largest {largest})",
+            run.size
         );
     }
 }
