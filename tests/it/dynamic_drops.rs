@@ -447,8 +447,9 @@ fn a_ball_asleep_on_the_plate_is_carried() {
 /// plate; body and plate together gained 0.20 J between the 92nd and the 100th step and 2.35 J
 /// between the 112th and the 116th. The push out of its overlap (`coupling/dynamic_tools/
 /// push_out.rs`) lifted it by up to 1.3 mm and turned it by up to 0.03 rad at most substeps.
-/// Now the surface takes an overlap that costs less energy pressed into it than lifted out of
-/// the tool's weight: the U comes to rest 0.54 m deep.
+/// Now the surface takes an overlap that costs less energy pressed into it than the tool's shift
+/// out of it against its weight, per contact and for the whole shift: the U sinks to rest 0.54
+/// m deep without tipping.
 #[test]
 fn a_heavy_u_tipping_in_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.866_664_5, 1.184_714_1, 1.374_012_2, true).unwrap();

@@ -24,7 +24,8 @@ const SWEEPS: usize = 30;
 /// overlap the approach made, the point takes what the tool's fall over the substep made
 /// (`fed_approach`) and, of the rest, the tool's share of a plastic impact at the touch
 /// (`tool_share`); the tool is moved out of everything else (where that costs less energy than
-/// pressing the surface by it, `cheaper_pressed`): the least mass-weighted shift
+/// pressing the surface by it, contact by contact, `cheaper_pressed`, and for the shift as a
+/// whole): the least mass-weighted shift
 /// of its pose (translation and turn about its centre of mass) that takes that part off (as
 /// far as [`SWEEPS`] sweeps get). The contacts' points move with it and their depths lose what
 /// the shift took off; what is left is pressed into the surface as before. Its velocities are
@@ -129,6 +130,23 @@ pub(crate) fn push_out_bodies(
                 turn += d.inverse_inertia * (ang * dl);
             }
         }
+        // The shift as a whole: where moving the tool against the acceleration rapier feeds it
+        // costs more than pressing the surface by what the shift would take off, the surface
+        // takes it (each contact alone may be cheaper moved, while together they lift the
+        // body: the U in a funnel, its walls' contacts pushing sideways, was lifted up to 3.8
+        // cm and turned 0.42 rad in a substep).
+        let lifting: Real = (0..3)
+            .filter(|&k| d.inverse_mass[k] > 0.0)
+            .map(|k| -d.acceleration[k] * shift[k] / d.inverse_mass[k])
+            .sum();
+        let pressing: Option<Real> = rows
+            .iter()
+            .filter(|r| r.3 > 0.0)
+            .map(|&(i, _, _, depth, _)| press_energy(&contacts[i], surface, depth))
+            .sum();
+        if pressing.is_some_and(|p| p < lifting) {
+            continue;
+        }
         if !(shift.is_finite() && turn.is_finite())
             || (shift == Vector::ZERO && turn == Vector::ZERO)
             || !d.displace(shift, turn)
@@ -183,12 +201,21 @@ fn cheaper_pressed(
         return false;
     }
     let shifting = (fed_along / tool_inverse).max(0.0) * rest;
+    press_energy(c, surface, rest).is_some_and(|pressing| pressing < shifting)
+}
+
+/// The work pressing the surface's point of contact `c` in by `depth` does against the springs
+/// of its vertices (the least mass-weighted motion of them, as
+/// [`MassSpringSurface::press_points`] moves them: their forces now, and each vertex's whole
+/// edge stiffness, more than a plate resists along its normal); `None` where the point's
+/// masses are not finite and positive.
+fn press_energy(c: &SurfaceContact, surface: &MassSpringSurface, depth: Real) -> Option<Real> {
     let weights = c.weights();
     let point_inverse: Real = weights.iter().map(|&(v, w)| w * w / surface.mass(v)).sum();
     if !(point_inverse > 0.0 && point_inverse.is_finite()) {
-        return false;
+        return None;
     }
-    let mu = rest / point_inverse;
+    let mu = depth / point_inverse;
     let pressing: Real = weights
         .iter()
         .map(|&(v, w)| {
@@ -197,7 +224,7 @@ fn cheaper_pressed(
                 + 0.5 * surface.vertex_stiffness(v) * moved * moved
         })
         .sum();
-    pressing.is_finite() && pressing < shifting
+    pressing.is_finite().then_some(pressing)
 }
 
 /// The share of a contact's depth made by its tool's approach that the surface's point keeps:
