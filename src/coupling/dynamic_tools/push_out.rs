@@ -108,7 +108,7 @@ pub(crate) fn push_out_bodies(
                 let diag = lin.dot(d.inverse_mass * lin) + ang.dot(d.inverse_inertia * ang);
                 // The acceleration rapier's step fed the tool's point along the normal.
                 let fed_along = (d.acceleration + d.angular_acceleration.cross(r)).dot(n);
-                let depth = asked(i, c, fed_approach(d, n, r, h), (diag, fed_along));
+                let depth = asked(i, c, fed_approach(fed_along, h), (diag, fed_along));
                 (i, lin, ang, depth, diag)
             })
             .collect();
@@ -169,12 +169,20 @@ pub(crate) fn push_out_bodies(
     moved
 }
 
-/// How far the accelerations rapier's step fed tool `d` over the substep `h` (gravity, the
-/// user's forces: [`DynamicTool::fall`]) drove its point at arm `r` from its centre of mass in
-/// along the contact's normal `n` (world).
-fn fed_approach(d: &DynamicTool, n: Vector, r: Vector, h: Real) -> Real {
-    let a = d.acceleration + d.angular_acceleration.cross(r);
-    (h * h * a.dot(n)).max(0.0)
+/// How far the accelerations rapier's step fed a tool over the substep `h` (gravity, the
+/// user's forces: [`DynamicTool::fall`]) drove its point in, from their part along the
+/// contact's normal at the point (`fed_along`, world).
+fn fed_approach(fed_along: Real, h: Real) -> Real {
+    (h * h * fed_along).max(0.0)
+}
+
+/// The inverse effective mass of contact `c`'s point of the surface along any direction,
+/// `Σ wⱼ² / mⱼ` over its vertices.
+fn point_inverse(c: &SurfaceContact, surface: &MassSpringSurface) -> Real {
+    c.weights()
+        .iter()
+        .map(|&(v, w)| w * w / surface.mass(v))
+        .sum()
 }
 
 /// Whether pressing the surface's point of contact `c` (surface frame) in by `rest` costs less
@@ -210,13 +218,13 @@ fn cheaper_pressed(
 /// edge stiffness, more than a plate resists along its normal); `None` where the point's
 /// masses are not finite and positive.
 fn press_energy(c: &SurfaceContact, surface: &MassSpringSurface, depth: Real) -> Option<Real> {
-    let weights = c.weights();
-    let point_inverse: Real = weights.iter().map(|&(v, w)| w * w / surface.mass(v)).sum();
+    let point_inverse = point_inverse(c, surface);
     if !(point_inverse > 0.0 && point_inverse.is_finite()) {
         return None;
     }
     let mu = depth / point_inverse;
-    let pressing: Real = weights
+    let pressing: Real = c
+        .weights()
         .iter()
         .map(|&(v, w)| {
             let moved = w / surface.mass(v) * mu;
@@ -235,11 +243,7 @@ fn press_energy(c: &SurfaceContact, surface: &MassSpringSurface, depth: Real) ->
 /// spinning onto a plate of 6 g vertices) and is moved out of the rest. 1 where either mass is
 /// not finite and positive.
 fn tool_share(c: &SurfaceContact, surface: &MassSpringSurface, tool_inverse: Real) -> Real {
-    let point_inverse: Real = c
-        .weights()
-        .iter()
-        .map(|&(v, w)| w * w / surface.mass(v))
-        .sum();
+    let point_inverse = point_inverse(c, surface);
     let share = point_inverse / (point_inverse + tool_inverse);
     if share.is_finite() && tool_inverse >= 0.0 && point_inverse > 0.0 {
         share.clamp(0.0, 1.0)

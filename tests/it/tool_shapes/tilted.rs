@@ -259,10 +259,7 @@ fn a_jaws_face_on_a_few_triangles_rests_without_see_sawing() {
         Rotation::from_rotation_y(1.0006113),
         (-0.044105347, 0.094921745),
     );
-    check(&r, inside_of(&r), &[], "jaws over (-0.044, 0.095)");
-    balances_the_pins(&r, 0.01, "jaws over (-0.044, 0.095)");
-    let reaction = r.set.tool_reaction(r.tool).unwrap();
-    assert!(steady(&reaction), "{reaction:?}");
+    jaws_rest_on_the_pins(&r, "jaws over (-0.044, 0.095)");
 }
 
 /// A case of the tilted-tools property test (random seed 9014; it failed at this stop's
@@ -280,10 +277,7 @@ fn a_vertex_on_a_jaws_edge_is_held_by_the_face_it_pushes() {
     let turn =
         Rotation::from_axis_angle(horizontal, 0.0036305208) * Rotation::from_rotation_y(4.5123277);
     let r = jaws_pressed(turn, (0.06173612, 0.12480898));
-    check(&r, inside_of(&r), &[], "jaws over (0.062, 0.125)");
-    balances_the_pins(&r, 0.01, "jaws over (0.062, 0.125)");
-    let reaction = r.set.tool_reaction(r.tool).unwrap();
-    assert!(steady(&reaction), "{reaction:?}");
+    jaws_rest_on_the_pins(&r, "jaws over (0.062, 0.125)");
 }
 
 /// A case of the tilted-tools property test (random seed 6102; it failed at this stop's
@@ -301,10 +295,7 @@ fn a_jaws_edge_beside_a_held_vertex_holds_the_far_vertex_through_the_step() {
         Rotation::from_rotation_y(1.2642744),
         (0.11669069, 0.015132333),
     );
-    check(&r, inside_of(&r), &[], "jaws over (0.117, 0.015)");
-    balances_the_pins(&r, 0.01, "jaws over (0.117, 0.015)");
-    let reaction = r.set.tool_reaction(r.tool).unwrap();
-    assert!(steady(&reaction), "{reaction:?}");
+    jaws_rest_on_the_pins(&r, "jaws over (0.117, 0.015)");
 }
 
 /// A case of the tilted-tools property test (random seed 6105, rounded; it failed at this
@@ -324,6 +315,15 @@ fn a_vertex_pushed_off_a_legs_edge_by_a_corners_press_is_let_go() {
     let r = u_pressed(turned(yaw, tilt, tilt_axis), (0.036, 0.0));
     check(&r, inside_u(&r), &[], "U over (0.036, 0)");
     balances_the_pins(&r, 0.01, "U over (0.036, 0)");
+    let reaction = r.set.tool_reaction(r.tool).unwrap();
+    assert!(steady(&reaction), "{reaction:?}");
+}
+
+/// The jaws' checks ([`check`]), their force within 1 % of the pins' and steady through the
+/// step (the last substep's force the step's mean).
+fn jaws_rest_on_the_pins(r: &Pressed, name: &str) {
+    check(r, inside_of(r), &[], name);
+    balances_the_pins(r, 0.01, name);
     let reaction = r.set.tool_reaction(r.tool).unwrap();
     assert!(steady(&reaction), "{reaction:?}");
 }

@@ -266,6 +266,8 @@ pub(super) fn book_impulses(
     hold_impulse: &mut [DVec3],
 ) -> Vec<DVec3> {
     let mut impulse = vec![DVec3::ZERO; list.len()];
+    // The surface vertex of slot `k`.
+    let vertex = |k: usize| list.get(k).and_then(|&fi| free.get(fi as usize)).copied();
     for (c, (d, e, n, row)) in cons.iter().enumerate() {
         let mut weight = 0.0;
         // What the row gave vertices a sliding hold holds, across that hold's normal
@@ -275,8 +277,7 @@ pub(super) fn book_impulses(
             let given = *d * (w * lambda[c]);
             impulse[k] += given;
             weight += w;
-            let v = list.get(k).and_then(|&fi| free.get(fi as usize));
-            if let Some(&v) = v.filter(|&&v| held.get(v as usize) == Some(&true)) {
+            if let Some(v) = vertex(k).filter(|&v| held.get(v as usize) == Some(&true)) {
                 let m = held_normal.get(v as usize).copied().unwrap_or(DVec3::ZERO);
                 if m != DVec3::ZERO {
                     across += given - m * m.dot(given);
@@ -296,8 +297,7 @@ pub(super) fn book_impulses(
             }
             Row::Vertex => {
                 // The vertex hold's impulse (`MassSpringSurface::hold_impulse`).
-                let v = list.get(e[0].0).and_then(|&fi| free.get(fi as usize));
-                if let Some(slot) = v.and_then(|&v| hold_impulse.get_mut(v as usize)) {
+                if let Some(slot) = vertex(e[0].0).and_then(|v| hold_impulse.get_mut(v as usize)) {
                     *slot += *d * lambda[c];
                 }
             }
