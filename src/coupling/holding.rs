@@ -113,20 +113,36 @@ impl ToolMotion {
         velocities: &mut Vec<Vector>,
     ) {
         let before = if self.holder.is_some() { now } else { before };
-        for (local, mesh) in &self.shape.parts {
+        for (part, (local, mesh)) in self.shape.parts.iter().enumerate() {
             let first = contacts.len();
+            let end = *inv * self.end * *local;
             find_contacts(
                 triangles,
                 (candidates, kept, rings),
                 mesh,
                 &(*inv * self.start * *local),
-                &(*inv * self.end * *local),
+                &end,
                 h,
                 before,
                 now,
                 contacts,
                 velocities,
             );
+            // A compound's part's features inside its other parts make no contact.
+            if self.shape.is_compound() {
+                let margin = contact_margin(&mesh.local_aabb(), 1e-3);
+                let mut k = first;
+                while k < contacts.len() {
+                    let point =
+                        local.transform_point(end.inverse_transform_point(contacts[k].point));
+                    if self.shape.covered(part, point, margin) {
+                        contacts.remove(k);
+                        velocities.remove(k);
+                    } else {
+                        k += 1;
+                    }
+                }
+            }
             if self.holder.is_some() {
                 depths_now(&mut contacts[first..], &velocities[first..], h);
             }

@@ -3,7 +3,7 @@
 //! edges press the surface between its vertices.
 
 use crate::geometry::TouchMesh;
-use crate::math::{Pose, Real};
+use crate::math::{Pose, Real, Vector};
 use parry3d::shape::{Shape, SharedShape, TriMeshFlags};
 
 /// A tool's shape as the coupling uses it.
@@ -17,6 +17,12 @@ pub(super) struct ToolShape {
     /// The polyhedral parts (cuboids, convex polyhedra, triangle meshes; a compound's parts
     /// each), with their pose in the tool's frame.
     pub parts: Vec<(Pose, TouchMesh)>,
+    /// A compound's parts (oriented copies of its triangle meshes), with their pose in the
+    /// tool's frame, and for each of `parts` its place among them: a polyhedral part's vertex
+    /// or edge inside another part is not on the tool's boundary ([`ToolShape::covered`]).
+    /// Empty for a shape that is not a compound of two parts or more.
+    cover: Vec<(Pose, SharedShape)>,
+    part_of: Vec<usize>,
     /// The query shape scaled to a unit bounding radius, and the factor, for a tool under a
     /// metre across (`None` otherwise, for a ball, or where parry cannot scale the shape):
     /// parry's contact queries are asked of it
@@ -29,13 +35,15 @@ impl ToolShape {
     /// surface vertices they contain carry their contact.
     pub fn of(shape: &dyn Shape) -> Self {
         let mut parts = Vec::new();
+        let (mut cover, mut part_of) = (Vec::new(), Vec::new());
         let query = match shape.as_compound() {
             Some(compound) => {
                 let mut changed = false;
                 let mut rebuilt = Vec::with_capacity(compound.shapes().len());
-                for (pose, part) in compound.shapes() {
+                for (k, (pose, part)) in compound.shapes().iter().enumerate() {
                     if let Some(mesh) = polyhedral(part.as_ref()) {
                         parts.push((*pose, mesh));
+                        part_of.push(k);
                     }
                     match oriented(part.as_ref()) {
                         Some(o) => {
@@ -44,6 +52,11 @@ impl ToolShape {
                         }
                         None => rebuilt.push((*pose, part.clone())),
                     }
+                }
+                if rebuilt.len() > 1 {
+                    cover.clone_from(&rebuilt);
+                } else {
+                    part_of.clear();
                 }
                 changed.then(|| SharedShape::compound(rebuilt))
             }
@@ -55,7 +68,37 @@ impl ToolShape {
             }
         };
         let unit = unit_sized(query.as_deref().unwrap_or(shape));
-        ToolShape { query, parts, unit }
+        ToolShape {
+            query,
+            parts,
+            cover,
+            part_of,
+            unit,
+        }
+    }
+
+    /// Whether the tool is a compound of two parts or more ([`ToolShape::covered`]).
+    pub fn is_compound(&self) -> bool {
+        !self.cover.is_empty()
+    }
+
+    /// Whether `point` (the tool's frame) lies inside a part of the compound other than
+    /// polyhedral part `part`'s, more than `margin` from that part's boundary: a vertex or edge
+    /// of `part` there is inside the tool, not on its boundary, and makes no contact. A
+    /// dumbbell's bar ends inside its balls: a 4.2 kg dumbbell landing at 6.2 m/s on a stiff
+    /// plate had the plate pass a bar's end edges inside a ball within the substep, their
+    /// contacts' normals across the bar, and was pushed out of them by a turn about its long
+    /// axis, its cheapest (0.22 rad in a substep): it spun at 24 rad/s for good.
+    pub fn covered(&self, part: usize, point: Vector, margin: Real) -> bool {
+        let own = self.part_of.get(part).copied();
+        self.cover.iter().enumerate().any(|(k, (pose, shape))| {
+            if Some(k) == own {
+                return false;
+            }
+            let local = pose.inverse_transform_point(point);
+            let projection = shape.project_local_point(local, false);
+            projection.is_inside && (projection.point - local).length() > margin
+        })
     }
 }
 
@@ -123,5 +166,41 @@ pub(super) fn contact_margin(aabb: &parry3d::bounding_volume::Aabb, fraction: Re
         margin
     } else {
         Real::MIN_POSITIVE
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dumbbell's bar (a cuboid from one ball's centre to the other's): its end corners lie
+    /// inside the balls, its middle edges outside them (by the distance to the balls' centres).
+    #[test]
+    fn a_bar_inside_its_balls_is_covered_where_parry_says_it_is_inside() {
+        let (r, rb) = (0.08, 0.05);
+        let ball = SharedShape::ball(rb);
+        let bar = SharedShape::cuboid(r, 0.01, 0.01);
+        let parts = vec![
+            (Pose::translation(-r, 0.0, 0.0), ball.clone()),
+            (Pose::translation(r, 0.0, 0.0), ball),
+            (Pose::IDENTITY, bar),
+        ];
+        let shape = ToolShape::of(&*SharedShape::compound(parts));
+        assert!(shape.is_compound());
+        assert_eq!(shape.parts.len(), 1, "only the bar is polyhedral");
+        let margin = 1e-4;
+        for x in [-r, -0.5 * r, 0.0, 0.5 * r, r] {
+            for (y, z) in [(-0.01, -0.01), (0.01, -0.01), (-0.01, 0.01), (0.01, 0.01)] {
+                let p = Vector::new(x, y, z);
+                let deep_in_a_ball = [-r, r]
+                    .iter()
+                    .any(|&c| (p - Vector::new(c, 0.0, 0.0)).length() < rb - margin);
+                assert_eq!(shape.covered(0, p, margin), deep_in_a_ball, "{p:?}");
+            }
+        }
+        // A single shape covers nothing.
+        let single = ToolShape::of(&*SharedShape::cuboid(r, 0.01, 0.01));
+        assert!(!single.is_compound());
+        assert!(!single.covered(0, Vector::ZERO, margin));
     }
 }

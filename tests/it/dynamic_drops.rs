@@ -269,6 +269,36 @@ fn a_heavy_dumbbell_on_a_stiff_plate_at_one_substep_comes_to_rest() {
     check_drawn(Body::Dumbbell, 0.8671001, 1.3136439, 2.9456437, false).unwrap();
 }
 
+/// A 4.2 kg dumbbell dropped from 1.97 m on a 421 N/m plate at one substep per rigid step
+/// (`PROPTEST_RNG_SEED=5114` of the compounds' property test below, at four times its cases)
+/// comes to rest carrying its weight. Landing at 6.2 m/s, the plate passed within the substep
+/// the ends of the dumbbell's bar, which lie inside its balls; their edges' contacts, with
+/// normals across the bar, were taken out of the overlap by a turn about the dumbbell's long
+/// axis (its cheapest, 0.22 rad in a substep), and it spun about that axis at 24 rad/s for
+/// good, the contacts holding its balls' spinning points still by a sinking velocity of 4
+/// cm/s read at every step. A compound's part's vertices and edges inside its other parts now
+/// make no contact (`ToolShape::covered`).
+#[test]
+fn a_dumbbell_landing_fast_on_a_stiff_plate_comes_to_rest_without_spinning() {
+    check_drawn(Body::Dumbbell, 0.6184145, 1.974116, 2.624236, false).unwrap();
+}
+
+/// Known failure, kept ignored: a 2.4 kg U dropped from 1.63 m on a 21 N/m plate at one
+/// substep (`PROPTEST_RNG_SEED=5115` of the compounds' property test below, at four times its
+/// cases) goes through the plate. It settles 0.18 m deep in the funnel it makes (deeper than
+/// the U: not asked to rest), and from step 122 a leg's bottom corner sinks through the
+/// surface at about 0.7 mm a step: the surface vertex nearest it sits on the leg's vertical
+/// edge 2 mm above the corner, every contact there (the vertex inside the U, the vertical
+/// edge across the vertex's edges) has 97-100 % of its weight on that vertex and a normal
+/// across the leg, and the vertex slides up the edge (frictionless) while no contact of the
+/// corner itself holds the triangles round it. By step 320 the U is 8 cm through; from step
+/// 340 it tips over and falls. Traced at stop 62; not mended.
+#[test]
+#[ignore = "known failure: a U resting in a deep funnel has a corner sink through the surface"]
+fn a_u_resting_in_a_deep_funnel_stays_on_the_plate() {
+    check_drawn(Body::U, 0.37834, 1.6348841, 1.3268698, false).unwrap();
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
