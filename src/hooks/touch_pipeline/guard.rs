@@ -7,7 +7,9 @@ use super::articulations::{articulated, same_articulation};
 use super::correction::{apply_correction, undone_almost_whole};
 use super::impacts::{apply_rewind, measure_slow_pair, rewind_from, SlowPair};
 use super::left_alone::Screen;
-use super::misread::{depth_misread, normal_out_of_convex, touching_at_start};
+use super::misread::{
+    deeper_than_at_start, depth_misread, normal_out_of_convex, touching_at_start,
+};
 use super::pair_view::{push_out, resting_within, safe_step, slow_pair_calm, Mover, PairView};
 use super::pose_sync::sync_moved_colliders;
 use super::rapier_contacts::{rapier_normal, resting_slop};
@@ -302,8 +304,34 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                                 out,
                             )
                         };
+                        // A slow pair rapier holds points for but read apart when the step
+                        // began and reads apart now, on a still convex partner, that overlapped
+                        // when the step began and got deeper (`deeper_than_at_start`): no
+                        // first touch on its path, and no resting pair. How deep it was then.
+                        let misread_start = (resting.is_none()
+                            && rapier.is_some()
+                            && !overlapped
+                            && !partner_dynamic
+                            && !may_tunnel
+                            && partner.shape().is_convex())
+                        .then(|| {
+                            deeper_than_at_start(
+                                (partner, &partner_prev(), &partner_pose),
+                                (co, &prev_pose, &pose_now),
+                                (resting_slop, push_tolerance),
+                            )
+                        })
+                        .flatten()
+                        .filter(|&start| start > 0.0);
                         let (config, along_normal, blocked_at_start) = if let Some(r) = &resting {
                             let Some(c) = push_out(r.normal) else {
+                                continue;
+                            };
+                            (c.clone(), Some(c), false)
+                        } else if misread_start.is_some() {
+                            // Pushed back along parry's normal at the pose now to the depth it
+                            // had then (at least the resting slop), as a resting pair is.
+                            let Some(c) = near_normal().and_then(push_out) else {
                                 continue;
                             };
                             (c.clone(), Some(c), false)
@@ -496,11 +524,12 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // resting slop never gets deeper still, and rapier's steady overlap is
                         // left alone.
                         // A path blocked at its start (above) is pushed back to the slop.
-                        let target = match resting_target {
-                            Some(t) => t,
-                            None if blocked_at_start => slop,
-                            None => resting_slop,
-                        };
+                        let target =
+                            match resting_target.or(misread_start.map(|d| d.max(resting_slop))) {
+                                Some(t) => t,
+                                None if blocked_at_start => slop,
+                                None => resting_slop,
+                            };
                         // Over one step a pair gets deeper by at most its relative travel: an
                         // overlap along the normal beyond that (and beyond what rapier's points
                         // showed when the step began) is a measure gone wrong, not a motion to
@@ -512,9 +541,9 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let recycled_bound = rapier
                             .filter(|_| turned_since_update)
                             .map_or(0.0, |r| r.depth + corner_reach + resting_slop);
+                        let at_start = resting.map(|r| r.depth_at_start).or(misread_start);
                         let deepest_possible =
-                            (travel + resting.map_or(0.0, |r| r.depth_at_start) + resting_slop)
-                                .max(recycled_bound);
+                            (travel + at_start.unwrap_or(0.0) + resting_slop).max(recycled_bound);
                         // A push along rapier's normal that is no measure may be along a wrong
                         // normal (rapier's, against a box far larger than the mover, can be
                         // tens of degrees off): pushed along parry's at the pose now instead,
