@@ -132,16 +132,17 @@ impl ToolMotion {
             if self.shape.is_compound() {
                 let margin = contact_margin(&mesh.local_aabb(), 1e-3);
                 let mut k = first;
-                while k < contacts.len() {
+                for i in first..contacts.len() {
                     let point =
-                        local.transform_point(end.inverse_transform_point(contacts[k].point));
-                    if self.shape.covered(part, point, margin) {
-                        contacts.remove(k);
-                        velocities.remove(k);
-                    } else {
+                        local.transform_point(end.inverse_transform_point(contacts[i].point));
+                    if !self.shape.covered(part, point, margin) {
+                        contacts.swap(k, i);
+                        velocities.swap(k, i);
                         k += 1;
                     }
                 }
+                contacts.truncate(k);
+                velocities.truncate(k);
             }
             if self.holder.is_some() {
                 depths_now(&mut contacts[first..], &velocities[first..], h);

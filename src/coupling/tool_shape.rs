@@ -176,7 +176,7 @@ mod tests {
     /// A dumbbell's bar (a cuboid from one ball's centre to the other's): its end corners lie
     /// inside the balls, its middle edges outside them (by the distance to the balls' centres).
     #[test]
-    fn a_bar_inside_its_balls_is_covered_where_parry_says_it_is_inside() {
+    fn a_bar_is_covered_where_it_lies_inside_a_ball() {
         let (r, rb) = (0.08, 0.05);
         let ball = SharedShape::ball(rb);
         let bar = SharedShape::cuboid(r, 0.01, 0.01);
