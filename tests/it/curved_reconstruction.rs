@@ -249,47 +249,84 @@ proptest! {
         slide in (-1.0f32..1.0, -1.0f32..1.0),
         turn in (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0),
     ) {
-        let r = 10f32.powf(log_scale);
-        let half = 10f32.powf(log_size) * r;
-        let floor = Cuboid::new(Vector::new(half, 0.1 * r, half));
-        let floor_pose = Pose::from_translation(Vector::new(0.0, -0.1 * r, 0.0));
-        // The shape, and how far its lowest point lies below its centre.
-        let (shape, low) = match kind {
-            0 => (SharedShape::ball(r), r),
-            1 => (SharedShape::capsule_x(r, 0.5 * r), 0.5 * r),
-            2 => (SharedShape::round_cylinder(0.5 * r, r, 0.1 * r), 0.6 * r),
-            3 => (SharedShape::cylinder(0.5 * r, r), 0.5 * r),
-            4 => (SharedShape::cone(0.5 * r, r), 0.5 * r),
-            _ => (SharedShape::round_cuboid(r, 0.5 * r, r, 0.1 * r), 0.6 * r),
-        };
-        let (g0, g1) = (r * 10f32.powf(gaps.0), r * 10f32.powf(gaps.1));
-        let from = Vector::new(start_xz.0 * half, low + g0, start_xz.1 * half);
-        let to = from + Vector::new(slide.0 * r, g1 - g0, slide.1 * r);
-        let q1 = if kind == 0 {
-            Rotation::from_scaled_axis(Vector::new(turn.0, turn.1, turn.2))
-        } else {
-            Rotation::from_rotation_y(turn.1)
-        };
-        let motion = RigidMotion::new(
-            Pose::from_translation(from),
-            Pose::from_parts(to, q1),
-            Vector::ZERO,
-        );
-        let mut rec = Reconstructor::default();
-        let c = match rec.reconstruct_shapes(&floor, &floor_pose, shape.as_ref(), &motion).unwrap() {
-            Some(c) => c,
-            None => {
-                let fm = TouchMesh::from_shape(&floor).unwrap();
-                let mm = TouchMesh::from_shape(shape.as_ref()).unwrap();
-                rec.reconstruct_motion(&fm, &floor_pose, &mm, &motion).unwrap()
-            }
-        };
-        prop_assert!(
-            matches!(c.state, TouchState::Separated | TouchState::Touching),
-            "{:?}, depth {} of the size", c.state, c.depth / r
-        );
-        prop_assert!(!c.needs_correction());
+        slides_over_a_huge_box(kind, (log_scale, log_size), gaps, (start_xz, slide), turn)?;
     }
+}
+
+/// The property above for one case: shape `kind` of size `10^log_scale` over a box
+/// `10^log_size` times it, its path's gaps over the top `10^gaps` of its size, starting at
+/// `start_xz` of the box's half-size and sliding by `slide` of its size, turned by `turn`.
+fn slides_over_a_huge_box(
+    kind: u8,
+    (log_scale, log_size): (f32, f32),
+    gaps: (f32, f32),
+    (start_xz, slide): ((f32, f32), (f32, f32)),
+    turn: (f32, f32, f32),
+) -> Result<(), TestCaseError> {
+    let r = 10f32.powf(log_scale);
+    let half = 10f32.powf(log_size) * r;
+    let floor = Cuboid::new(Vector::new(half, 0.1 * r, half));
+    let floor_pose = Pose::from_translation(Vector::new(0.0, -0.1 * r, 0.0));
+    // The shape, and how far its lowest point lies below its centre.
+    let (shape, low) = match kind {
+        0 => (SharedShape::ball(r), r),
+        1 => (SharedShape::capsule_x(r, 0.5 * r), 0.5 * r),
+        2 => (SharedShape::round_cylinder(0.5 * r, r, 0.1 * r), 0.6 * r),
+        3 => (SharedShape::cylinder(0.5 * r, r), 0.5 * r),
+        4 => (SharedShape::cone(0.5 * r, r), 0.5 * r),
+        _ => (SharedShape::round_cuboid(r, 0.5 * r, r, 0.1 * r), 0.6 * r),
+    };
+    let (g0, g1) = (r * 10f32.powf(gaps.0), r * 10f32.powf(gaps.1));
+    let from = Vector::new(start_xz.0 * half, low + g0, start_xz.1 * half);
+    let to = from + Vector::new(slide.0 * r, g1 - g0, slide.1 * r);
+    let q1 = if kind == 0 {
+        Rotation::from_scaled_axis(Vector::new(turn.0, turn.1, turn.2))
+    } else {
+        Rotation::from_rotation_y(turn.1)
+    };
+    let motion = RigidMotion::new(
+        Pose::from_translation(from),
+        Pose::from_parts(to, q1),
+        Vector::ZERO,
+    );
+    let mut rec = Reconstructor::default();
+    let c = match rec
+        .reconstruct_shapes(&floor, &floor_pose, shape.as_ref(), &motion)
+        .unwrap()
+    {
+        Some(c) => c,
+        None => {
+            let fm = TouchMesh::from_shape(&floor).unwrap();
+            let mm = TouchMesh::from_shape(shape.as_ref()).unwrap();
+            rec.reconstruct_motion(&fm, &floor_pose, &mm, &motion)
+                .unwrap()
+        }
+    };
+    prop_assert!(
+        matches!(c.state, TouchState::Separated | TouchState::Touching),
+        "{:?}, depth {} of the size",
+        c.state,
+        c.depth / r
+    );
+    prop_assert!(!c.needs_correction());
+    Ok(())
+}
+
+/// Known failure, kept ignored: found by the property above with `PROPTEST_RNG_SEED=5121`
+/// (also on stop 61's code). A rounded cylinder of unit size sliding over a box 80 times its
+/// size, its path 5.3 % and then 0.19 % of its size over the top, is read perforated, 0.62 % of
+/// its size deep. Not traced.
+#[test]
+#[ignore = "known failure: a rounded cylinder just over a huge box read 0.62 % of its size in"]
+fn a_rounded_cylinder_just_over_a_huge_box_is_not_read_through_it() {
+    slides_over_a_huge_box(
+        2,
+        (0.0, 1.902_021),
+        (-1.277_019, -2.724_091_5),
+        ((0.120_312_06, -0.064_466_074), (-0.854_117_6, 0.946_348)),
+        (0.0, -0.760_403_5, 0.0),
+    )
+    .unwrap();
 }
 
 proptest! {

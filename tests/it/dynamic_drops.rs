@@ -300,6 +300,15 @@ fn a_u_resting_in_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.37834, 1.6348841, 1.3268698, false).unwrap();
 }
 
+/// Known failure, kept ignored: another of that kind (`PROPTEST_RNG_SEED=5122` of the
+/// compounds' property below at four times its cases; also on stop 61's code): a 7.1 kg U
+/// dropped 0.30 m onto a plate of 17.3 N/m edges, 17 substeps, goes through. Not traced.
+#[test]
+#[ignore = "known failure: a heavy U sinking into a deep funnel goes through the plate"]
+fn a_heavy_u_set_down_in_a_deep_funnel_stays_on_the_plate() {
+    check_drawn(Body::U, 0.853_661_4, 0.304_479_54, 1.238_606_1, true).unwrap();
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
