@@ -523,13 +523,15 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         // began (at least the resting slop): whatever got deeper than the
                         // resting slop never gets deeper still, and rapier's steady overlap is
                         // left alone.
-                        // A path blocked at its start (above) is pushed back to the slop.
-                        let target =
-                            match resting_target.or(misread_start.map(|d| d.max(resting_slop))) {
-                                Some(t) => t,
-                                None if blocked_at_start => slop,
-                                None => resting_slop,
-                            };
+                        // So is a pair rapier misread (`misread_start`). A path blocked at its
+                        // start (above) is pushed back to the slop.
+                        // (How deep the resting or misread pair was when the step began.)
+                        let at_start = resting.map(|r| r.depth_at_start).or(misread_start);
+                        let target = match at_start {
+                            Some(d) => d.max(resting_slop),
+                            None if blocked_at_start => slop,
+                            None => resting_slop,
+                        };
                         // Over one step a pair gets deeper by at most its relative travel: an
                         // overlap along the normal beyond that (and beyond what rapier's points
                         // showed when the step began) is a measure gone wrong, not a motion to
@@ -541,7 +543,6 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                         let recycled_bound = rapier
                             .filter(|_| turned_since_update)
                             .map_or(0.0, |r| r.depth + corner_reach + resting_slop);
-                        let at_start = resting.map(|r| r.depth_at_start).or(misread_start);
                         let deepest_possible =
                             (travel + at_start.unwrap_or(0.0) + resting_slop).max(recycled_bound);
                         // A push along rapier's normal that is no measure may be along a wrong
