@@ -155,8 +155,7 @@ impl Screen<'_> {
         states: &PairStates,
     ) -> Vec<(ColliderHandle, Option<PairView>)> {
         let world = self.world;
-        let still = !self.options.report_touching
-            && self.mover.motion.length() + self.mover.turn <= 0.5 * self.slop;
+        let still = !self.options.report_touching && self.mover.still;
         let mut restless = Vec::new();
         for p in world.narrow_phase.contact_pairs_with(self.ch) {
             let ph = other_of(p, self.ch);

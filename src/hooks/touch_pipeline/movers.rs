@@ -13,6 +13,10 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                 .retain(|(a, b), _| world.colliders.contains(*a) && world.colliders.contains(*b));
             self.pair_states_pruned_at = self.pair_states.len();
         }
+        if self.pairs_read_at.len() > 2 * world.colliders.len().max(32) {
+            self.pairs_read_at
+                .retain(|c, _| world.colliders.contains(*c));
+        }
     }
 
     /// The bodies the guard's first pass looks at: awake dynamic bodies and tools with a touch
