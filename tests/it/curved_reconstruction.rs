@@ -312,12 +312,14 @@ fn slides_over_a_huge_box(
     Ok(())
 }
 
-/// Known failure, kept ignored: found by the property above with `PROPTEST_RNG_SEED=5121`
-/// (also on stop 61's code). A rounded cylinder of unit size sliding over a box 80 times its
-/// size, its path 5.3 % and then 0.19 % of its size over the top, is read perforated, 0.62 % of
-/// its size deep. Not traced.
+/// Found by the property above with `PROPTEST_RNG_SEED=5121` (also on stop 61's code). A
+/// rounded cylinder of unit size sliding over a box 80 times its size, its path 5.3 % and then
+/// 0.19 % of its size over the top, was read perforated, 0.62 % of its size deep: the advance
+/// found its first touch at 0.9951 of the step, and the advance back from the end (which is in
+/// the touch band by parry's contact, not by the advance's bound) its last touch at 0.9995,
+/// farther apart than the band, so it went in and out. Now a perforation must overlap halfway
+/// between the first and the last touch.
 #[test]
-#[ignore = "known failure: a rounded cylinder just over a huge box read 0.62 % of its size in"]
 fn a_rounded_cylinder_just_over_a_huge_box_is_not_read_through_it() {
     slides_over_a_huge_box(
         2,
@@ -350,39 +352,84 @@ proptest! {
         turn in (-3.0f32..3.0, -3.0f32..3.0, -3.0f32..3.0),
         off in (-0.4f32..0.4, -0.4f32..0.4),
     ) {
-        let s = 10f32.powf(log_scale);
-        let shape = curved(kind, s);
-        let half = 10f32.powf(log_size) * s;
-        let plate = Cuboid::new(Vector::new(half, 0.1 * half, half));
-        let plate_pose = Pose::from_translation(Vector::new(0.3 * half, -0.1 * half, -0.2 * half));
-        let rot = Rotation::from_scaled_axis(Vector::new(turn.0, turn.1, turn.2));
-        let depth = 10f32.powf(log_depth) * s;
-        let sm = shape.as_support_map().expect("a support map");
-        let low = sm.support_point_toward(&Pose::from_rotation(rot), -Vector::Y).y;
-        let at = Vector::new(0.3 * half + off.0 * half, -low - depth, -0.2 * half + off.1 * half);
-        let now = Pose::from_parts(at, rot);
-        let c = Reconstructor::default()
-            .push_out_shapes(&plate, &plate_pose, shape.as_ref(), &now, Vector::Y)
-            .unwrap()
-            .expect("a way out");
-        // The inputs' rounding: the plate's coordinates, where the shape lies.
-        let magnitude = (1.5 * half).max(at.abs().max_element());
-        let allowed = 1e-3 * s + 2.0 * 8.0 * Real::EPSILON * magnitude;
-        if c.needs_correction() {
-            prop_assert!(
-                (c.depth - depth).abs() <= allowed,
-                "way out {} for a depth {depth} (allowed {allowed})", c.depth
-            );
-            prop_assert!((c.reversing_vector - Vector::Y * c.depth).length() <= 1e-6 * c.depth);
-            // The lowest point where the push leaves the shape, against the plate's top (y = 0):
-            // above the plate's footprint, that is the gap.
-            prop_assert_eq!(c.touch_pose.rotation, rot);
-            let gap = c.touch_pose.translation.y + low;
-            prop_assert!(gap.abs() <= allowed, "left {gap} from the plate (allowed {allowed})");
-        } else {
-            // Touching: within the touch band, ten tolerances of the plate's coordinates.
-            let band = 10.0 * 8.0 * Real::EPSILON * 3.0 * half + 1e-3 * s;
-            prop_assert!(depth <= band, "{:?} at a depth {depth} (band {band})", c.state);
-        }
+        push_out_of_a_huge_box(kind, log_scale, log_size, log_depth, turn, off)?;
     }
+}
+
+/// [`a_push_out_of_a_huge_box_leaves_the_shape_touching_it`]'s case.
+fn push_out_of_a_huge_box(
+    kind: u8,
+    log_scale: f32,
+    log_size: f32,
+    log_depth: f32,
+    turn: (f32, f32, f32),
+    off: (f32, f32),
+) -> Result<(), TestCaseError> {
+    let s = 10f32.powf(log_scale);
+    let shape = curved(kind, s);
+    let half = 10f32.powf(log_size) * s;
+    let plate = Cuboid::new(Vector::new(half, 0.1 * half, half));
+    let plate_pose = Pose::from_translation(Vector::new(0.3 * half, -0.1 * half, -0.2 * half));
+    let rot = Rotation::from_scaled_axis(Vector::new(turn.0, turn.1, turn.2));
+    let depth = 10f32.powf(log_depth) * s;
+    let sm = shape.as_support_map().expect("a support map");
+    let low = sm
+        .support_point_toward(&Pose::from_rotation(rot), -Vector::Y)
+        .y;
+    let at = Vector::new(
+        0.3 * half + off.0 * half,
+        -low - depth,
+        -0.2 * half + off.1 * half,
+    );
+    let now = Pose::from_parts(at, rot);
+    let c = Reconstructor::default()
+        .push_out_shapes(&plate, &plate_pose, shape.as_ref(), &now, Vector::Y)
+        .unwrap()
+        .expect("a way out");
+    // The inputs' rounding: the plate's coordinates, where the shape lies.
+    let magnitude = (1.5 * half).max(at.abs().max_element());
+    let allowed = 1e-3 * s + 2.0 * 8.0 * Real::EPSILON * magnitude;
+    if c.needs_correction() {
+        prop_assert!(
+            (c.depth - depth).abs() <= allowed,
+            "way out {} for a depth {depth} (allowed {allowed})",
+            c.depth
+        );
+        prop_assert!((c.reversing_vector - Vector::Y * c.depth).length() <= 1e-6 * c.depth);
+        // The lowest point where the push leaves the shape, against the plate's top (y = 0):
+        // above the plate's footprint, that is the gap.
+        prop_assert_eq!(c.touch_pose.rotation, rot);
+        let gap = c.touch_pose.translation.y + low;
+        prop_assert!(
+            gap.abs() <= allowed,
+            "left {gap} from the plate (allowed {allowed})"
+        );
+    } else {
+        // Touching: within the touch band, ten tolerances of the plate's coordinates.
+        let band = 10.0 * 8.0 * Real::EPSILON * 3.0 * half + 1e-3 * s;
+        prop_assert!(
+            depth <= band,
+            "{:?} at a depth {depth} (band {band})",
+            c.state
+        );
+    }
+    Ok(())
+}
+
+/// Known failure, kept ignored: found by the property above on a random seed (stop 63; also on
+/// stop 62's code). A cylinder 1.2 mm across, turned any way, 3.8 µm into the top of a box
+/// 11.8 mm wide, is answered `Separated` by the push out, where the test allows a touch only
+/// 2.4 µm deep. Not traced.
+#[test]
+#[ignore = "known failure: a cylinder 1.9e-3 of its size into a box read apart by the push out"]
+fn a_cylinder_on_its_rim_just_in_a_box_is_pushed_out() {
+    push_out_of_a_huge_box(
+        3,
+        -2.687_602_8,
+        0.760_623_2,
+        -2.727_72,
+        (-1.111_356, -1.961_037_9, 0.340_299_43),
+        (0.264_447_6, 0.0),
+    )
+    .unwrap();
 }

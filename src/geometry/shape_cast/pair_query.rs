@@ -228,7 +228,7 @@ impl<'a> PairQuery<'a> {
 
     /// The distance with `moving` at `pose` (0 when overlapping), `None` when parry has no
     /// query for the pair.
-    fn distance(&self, pose: &Pose) -> Option<Real> {
+    pub(super) fn distance(&self, pose: &Pose) -> Option<Real> {
         if !self.sized {
             return None;
         }
