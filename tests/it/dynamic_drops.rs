@@ -309,6 +309,15 @@ fn a_heavy_u_set_down_in_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.853_661_4, 0.304_479_54, 1.238_606_1, true).unwrap();
 }
 
+/// Known failure, kept ignored: a third of that kind (`PROPTEST_RNG_SEED=5124` of the
+/// compounds' property below at four times its cases; stop 63's code): a 7.8 kg U dropped
+/// 1.16 m onto a plate of 41.8 N/m edges, 17 substeps, goes through. Not traced.
+#[test]
+#[ignore = "known failure: a heavy U sinking into a deep funnel goes through the plate"]
+fn a_heavy_u_dropped_into_a_deep_funnel_stays_on_the_plate() {
+    check_drawn(Body::U, 0.893_265, 1.162_504_8, 1.621_358_9, true).unwrap();
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
