@@ -318,6 +318,20 @@ fn a_heavy_u_dropped_into_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.893_265, 1.162_504_8, 1.621_358_9, true).unwrap();
 }
 
+/// Known failure, kept ignored: found by the compounds' property below at four times its cases
+/// (`PROPTEST_RNG_SEED=5127`; also on stop 62's code). A 11.8 g U dropped 7.6 cm onto a plate
+/// of 118 N/m edges, 17 substeps, rests on six contacts for 9 s and is then kicked at step 562:
+/// a point of a surface edge under it is read 17.4 mm inside the U with a normal along +x (a
+/// way out sideways), while its other contacts read it 1e-5 m over the plate, and the push out
+/// moves the U 6.9 mm sideways and 3.0 mm up, turned 0.10 rad: it falls back at 0.16 m/s and
+/// spins at 0.02 rad/s from then on. Not traced further (the deep-funnel U's sideways exits,
+/// above, may be the same).
+#[test]
+#[ignore = "known failure: a light U at rest kicked by a surface point read inside its leg"]
+fn a_light_u_at_rest_on_a_flat_plate_is_not_kicked() {
+    check_drawn(Body::U, -1.928_590_4, 0.076_159_93, 2.072_019_6, true).unwrap();
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
@@ -503,3 +517,4 @@ fn a_ball_asleep_on_the_plate_is_carried() {
 fn a_heavy_u_tipping_in_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.866_664_5, 1.184_714_1, 1.374_012_2, true).unwrap();
 }
+
