@@ -517,4 +517,3 @@ fn a_ball_asleep_on_the_plate_is_carried() {
 fn a_heavy_u_tipping_in_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.866_664_5, 1.184_714_1, 1.374_012_2, true).unwrap();
 }
-

@@ -155,14 +155,23 @@ impl Screen<'_> {
         states: &PairStates,
     ) -> Vec<(ColliderHandle, Option<PairView>)> {
         let world = self.world;
-        let still = !self.options.report_touching && self.mover.still;
+        let calm = !self.options.report_touching;
         let mut restless = Vec::new();
         for p in world.narrow_phase.contact_pairs_with(self.ch) {
             let ph = other_of(p, self.ch);
             let Some(partner) = world.colliders.get(ph) else {
                 continue;
             };
-            if still && self.body_of(partner).is_none_or(|b| !b.is_kinematic()) {
+            // A still mover is not read against a dynamic partner (that partner, if it moved,
+            // reads the pair), nor against a fixed one it moved little against since they were
+            // last read (`unmoved_since_read`).
+            let skip = calm
+                && match self.body_of(partner) {
+                    Some(b) if b.is_kinematic() => false,
+                    Some(b) if b.is_dynamic() => self.mover.still,
+                    _ => self.mover.still && self.mover.unmoved_since_read,
+                };
+            if skip {
                 continue;
             }
             if self.left_to_rapier(ph, partner, Some(p), states)

@@ -128,9 +128,12 @@ pub(super) struct Mover<'a> {
     pub turn: Real,
     /// How far its farthest point lies from its centre (`turn` per radian).
     pub arm: Real,
-    /// Whether it moved (translation plus the arc of its rotation) less than half the slop
-    /// since its pairs were last read ([`super::TouchPipeline`]'s `pairs_read_at`).
+    /// Whether it moved (translation plus the arc of its rotation) less than half the slop over
+    /// the step.
     pub still: bool,
+    /// Whether it moved less than a tenth of the slop since its pairs with still partners were
+    /// last read ([`super::TouchPipeline`]'s `pairs_read_at`).
+    pub unmoved_since_read: bool,
 }
 
 /// A shape turns no new corner into a contact if it has none (a ball, a capsule) or did not
