@@ -279,8 +279,9 @@ pub struct TouchPipeline<H: PhysicsHooks = ()> {
     refused: HashMap<ColliderHandle, (usize, TouchMeshError)>,
     /// Touch started / ended per pair ([`TouchPipeline::drain_touch_events`]).
     touch: PairTracker,
-    /// Each mover's pose when the guard last read its pairs: one that moved less than half the
-    /// slop since then is skipped against fixed and dynamic partners (`Screen::restless_pairs`).
+    /// Each mover's pose when the guard last read its pairs: one still over the step that moved
+    /// less than a tenth of the slop since then is skipped against fixed partners
+    /// (`Screen::restless_pairs`).
     pairs_read_at: HashMap<ColliderHandle, Pose>,
     /// The last step's pose history, kept to be refilled (a map of every body collected anew
     /// each step grew and rehashed every time: a tenth of the pyramid scene's touch step).

@@ -319,7 +319,7 @@ fn a_heavy_u_dropped_into_a_deep_funnel_stays_on_the_plate() {
 }
 
 /// Known failure, kept ignored: found by the compounds' property below at four times its cases
-/// (`PROPTEST_RNG_SEED=5127`; also on stop 62's code). A 11.8 g U dropped 7.6 cm onto a plate
+/// (`PROPTEST_RNG_SEED=5127`; also on stop 62's code). An 11.8 g U dropped 7.6 cm onto a plate
 /// of 118 N/m edges, 17 substeps, rests on six contacts for 9 s and is then kicked at step 562:
 /// a point of a surface edge under it is read 17.4 mm inside the U with a normal along +x (a
 /// way out sideways), while its other contacts read it 1e-5 m over the plate, and the push out

@@ -288,8 +288,9 @@ impl<'a> PairQuery<'a> {
             return None;
         }
         let along = (p2 - p1).try_normalize().and_then(|n| {
+            let gap = self.gap_local((f, m), &pos12, n);
             let n = self.pos_fixed.rotation * n;
-            Some((n, self.gap_along(pose, n)?)).filter(|(n, _)| n.is_finite())
+            (gap.is_finite() && n.is_finite()).then_some((n, gap))
         });
         Some(Separation { distance, along })
     }
@@ -299,13 +300,18 @@ impl<'a> PairQuery<'a> {
     /// their distance from below (negative where they overlap along `n`). `None` for other
     /// pairs.
     fn gap_along(&self, pose: &Pose, n: Vector) -> Option<Real> {
-        let (f, m) = self.convex.as_ref().filter(|_| self.sized)?;
-        let pos12 = self.scaled_pose(pose);
+        let shapes = self.convex.as_ref().filter(|_| self.sized)?;
         let n = self.pos_fixed.rotation.inverse() * n;
-        let top = f.local_support_point_toward(n).dot(n);
-        let bottom = m.support_point_toward(&pos12, -n).dot(n);
-        let gap = (bottom - top) * self.unit - self.border();
+        let gap = self.gap_local((&shapes.0, &shapes.1), &self.scaled_pose(pose), n);
         gap.is_finite().then_some(gap)
+    }
+
+    /// [`PairQuery::gap_along`] on the scaled shapes `(f, m)`, `m` at `pos12` and `n` in
+    /// `fixed`'s frame.
+    fn gap_local(&self, (f, m): (&Scaled<'_>, &Scaled<'_>), pos12: &Pose, n: Vector) -> Real {
+        let top = f.local_support_point_toward(n).dot(n);
+        let bottom = m.support_point_toward(pos12, -n).dot(n);
+        (bottom - top) * self.unit - self.border()
     }
 
     /// The contact with `moving` at `pose` (in world space), if closer than twice the touch
