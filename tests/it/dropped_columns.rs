@@ -202,3 +202,23 @@ fn a_column_of_light_boxes_on_a_stiff_plate_stands_still_with_friction() {
         }
     }
 }
+
+/// Known failure, kept ignored: found by the property above (`PROPTEST_RNG_SEED=5129`; also
+/// on stop 62's code). Two 10 g boxes of 4.3 cm dropped 48 cm apart with friction on
+/// 2880 N/m: the upper one, falling at 3.4 m/s (5.7 cm a step, more than its size), ends step
+/// 20 with its centre 1.0 cm over the lower box's (they overlap by three quarters of their
+/// height: rapier steps this scene, with no CCD between two dynamic bodies and no step guard),
+/// and at step 21 the lower box leaves at 11.4 m/s spinning at 1,500 rad/s: 4.2 J from the
+/// column's 0.076 J. Whether rapier's push out of that overlap or the surface's coupling of the
+/// lower box made the energy was not traced.
+#[test]
+#[ignore = "known failure: a box falling into the one below in one step throws it"]
+fn a_box_falling_into_the_one_below_does_not_throw_it() {
+    let column = Column::drawn(
+        2,
+        (-1.669_729_7, -1.994_363_5, 3.459_063),
+        0.475_245_03,
+        true,
+    );
+    column.drop(600).unwrap();
+}

@@ -332,6 +332,15 @@ fn a_light_u_at_rest_on_a_flat_plate_is_not_kicked() {
     check_drawn(Body::U, -1.928_590_4, 0.076_159_93, 2.072_019_6, true).unwrap();
 }
 
+/// Known failure, kept ignored: another (`PROPTEST_RNG_SEED=5130`, stop 63's code): a 128 g U
+/// dropped 1.49 m onto 980 N/m edges, 17 substeps, still moves at 0.13 m/s in its last second.
+/// Not traced.
+#[test]
+#[ignore = "known failure: a U dropped on a stiff plate still moves at 0.13 m/s after 9 s"]
+fn a_u_dropped_on_a_stiff_plate_comes_to_rest() {
+    check_drawn(Body::U, -0.894_196_45, 1.488_826_4, 2.991_440_8, true).unwrap();
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
