@@ -209,8 +209,9 @@ fn a_column_of_light_boxes_on_a_stiff_plate_stands_still_with_friction() {
 /// 20 with its centre 1.0 cm over the lower box's (they overlap by three quarters of their
 /// height: rapier steps this scene, with no CCD between two dynamic bodies and no step guard),
 /// and at step 21 the lower box leaves at 11.4 m/s spinning at 1,500 rad/s: 4.2 J from the
-/// column's 0.076 J. Whether rapier's push out of that overlap or the surface's coupling of the
-/// lower box made the energy was not traced.
+/// column's 0.076 J. The same column on a fixed box for ground, stepped by rapier alone, ends
+/// step 20 the same way and loses energy at step 21 (0.065 J to 0.0064 J): the surface's
+/// coupling of the lower box (a dynamic tool) makes it. Not traced further.
 #[test]
 #[ignore = "known failure: a box falling into the one below in one step throws it"]
 fn a_box_falling_into_the_one_below_does_not_throw_it() {
