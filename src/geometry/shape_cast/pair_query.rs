@@ -433,16 +433,16 @@ impl<'a> PairQuery<'a> {
             // is larger; with neither apart, it crawls by half the touch band (an overlap it
             // runs into is bisected, above). (Asked at every step, the second gap's support
             // points cost rapier's CCD scene 10 % of its touch step.)
-            let sure = d * (1.0 - GJK_REL);
+            let gjk_sure = d * (1.0 - GJK_REL);
             let along_now = sep.as_ref().and_then(|s| s.along);
             let sure = match along_now {
                 Some((_, gap)) if gap < 0.5 * d => {
                     let below = last_apart
                         .and_then(|n| self.gap_along(&pose, n))
                         .map_or(gap, |g| g.max(gap));
-                    below.min(sure).max(self.touch)
+                    below.min(gjk_sure).max(self.touch)
                 }
-                _ => sure,
+                _ => gjk_sure,
             };
             if let Some((n, _)) = along_now.filter(|(_, gap)| *gap > 0.0) {
                 last_apart = Some(n);
@@ -456,7 +456,7 @@ impl<'a> PairQuery<'a> {
             // on average there, and the scene's step 7-10 % less.)
             if let (Some((v, arc)), Some((n, gap))) = (drift, along_now) {
                 let closing = (-v.dot(n)).max(0.0) + arc;
-                let safe = gap.min(d * (1.0 - GJK_REL)) - 0.5 * self.touch;
+                let safe = gap.min(gjk_sure) - 0.5 * self.touch;
                 if closing <= 0.0 && safe > 0.0 {
                     return Advance::Apart;
                 }
