@@ -451,3 +451,21 @@ fn a_large_cylinder_deep_in_a_box_is_pushed_out() {
     )
     .unwrap();
 }
+
+/// Found by the property above on a random seed (stop 63's review; also on stop 62's code): a
+/// cone of unit size, turned, 3.2 % of its size into the top of a box about twice its size, got
+/// no way out (`None`). The advance back toward it stopped at a touch, and parry's contact at
+/// that pose read the cone 1.29e-4 away, past twice the 5.6e-5 touch band, so it was refused.
+/// The advance's touch is the measure; the contact there, however far, gives the gap left.
+#[test]
+fn a_cone_pushed_out_of_a_box_gets_a_way_out() {
+    push_out_of_a_huge_box(
+        4,
+        0.0,
+        0.313_600_96,
+        -1.5,
+        (1.768_787_9, 0.388_255_66, -2.292_393_2),
+        (-0.082_617_804, 0.245_617_85),
+    )
+    .unwrap();
+}
