@@ -187,3 +187,15 @@ fn a_box_resting_on_the_floors_corner_tile_stays_within_the_bound() {
     let worst = run(24, 0.286_668_3, 0.5, 0.0, false);
     assert!(worst <= BOUND, "{worst} m deep");
 }
+
+/// Known failure, kept ignored: found by the property above at four times its cases
+/// (`PROPTEST_RNG_SEED=5134`, stop 64; the step guard's code is stop 63's, whose change at
+/// stop 64 is in the soft surfaces' contacts only), tracked: a 42 cm box dropped at 23.4 m/s
+/// over 41 tiles ends 1.11 mm into them, over the 1 mm bound (the kind of
+/// `a_fast_box_landing_across_three_tiles_stays_within_the_bound`). Not traced.
+#[test]
+#[ignore = "known failure: a fast box landing on 41 tiles ends 1.11 mm into them"]
+fn a_fast_box_landing_on_forty_one_tiles_stays_within_the_bound() {
+    let worst = run(41, 0.209_910_66, 23.393_47, 0.0, false);
+    assert!(worst <= BOUND, "{worst} m deep");
+}
