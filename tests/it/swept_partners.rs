@@ -196,7 +196,12 @@ fn a_box_resting_on_the_floors_corner_tile_stays_within_the_bound() {
 /// back to the 0.90 mm resting slop, one correction a step, until step 75, where the guard
 /// makes none and rapier's step drops it 0.2 mm at once (1.103 mm by parry's query; its
 /// velocity 0.3 mm/s); from there it creeps 0.4 um a step, uncorrected (1.109 mm at step 89).
-/// Whether the guard skips its pairs there or reads them calm was not traced.
+/// At that step the guard reads its three tile pairs calm: rapier's manifold points, re-read
+/// at the poses now, show it 0.06-0.8 um deep, and the corner reach of its turn since their
+/// update 0.41-0.44 mm, within the 0.90 mm resting slop, while parry's query reads it
+/// 1.10 mm in; from the next step it is still, and its pairs are skipped. Why rapier's points
+/// miss the overlap (a manifold recycled from another pose, as in the case above, is likely)
+/// was not traced.
 #[test]
 #[ignore = "known failure: a fast box landing on 41 tiles ends 1.11 mm into them"]
 fn a_fast_box_landing_on_forty_one_tiles_stays_within_the_bound() {
