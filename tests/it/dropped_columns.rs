@@ -224,7 +224,10 @@ fn a_column_of_light_boxes_on_a_stiff_plate_stands_still_with_friction() {
 /// stopped it. Tried and not kept: adding that push only until the body's velocity along it
 /// reaches what rapier's step left it (the upper box then ended at -0.17 m/s, the lower was
 /// thrown as before, and a stack of three frictionless boxes leant 16.8 mm, over its 15 mm
-/// bound: `auto_tools::stacked_boxes_stand_on_the_plate_and_it_carries_them_all`).
+/// bound: `auto_tools::stacked_boxes_stand_on_the_plate_and_it_carries_them_all`); leaving
+/// out a dynamic tool's speculative contacts whose gap (over rapier's 5 mm allowed error) lay
+/// within another dynamic tool (the upper box's, its corners within 5 mm of the lower box)
+/// made 1.44 J at the same step instead of 4.2 J (not traced further).
 #[test]
 #[ignore = "known failure: a box falling into the one below in one step throws it"]
 fn a_box_falling_into_the_one_below_does_not_throw_it() {
