@@ -74,8 +74,9 @@ const SNAP: Real = 1e-2;
 /// that vertex ([`triangle_contacts`]).
 const NEAR_VERTEX: Real = 0.1;
 
-/// A triangle contact's normal within this cosine of its triangle's plane pushes the
-/// triangle along that plane ([`triangle_contacts`]): sin 6°.
+/// A triangle contact whose normal's cosine with its triangle's normal is under this (its
+/// normal within about 6° of the triangle's plane) pushes the triangle along that plane
+/// ([`triangle_contacts`]).
 const ALONG_PLANE: Real = 0.1;
 
 /// The surface triangles (`candidates` of `triangles`, positions `positions`, surface frame) a
