@@ -94,13 +94,14 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     // arc of its rotation.
                     let arm = collider_reach(&self.hooks.meshes, ch, co);
                     let turn = prev_pose.rotation.angle_between(pose_now.rotation) * arm;
+                    let travelled = d.length() + turn;
                     // A body that moved less than rapier's prediction distance met nothing that
                     // stood still without rapier seeing it coming. With the rewind on, one that
                     // moved half of it may have met a partner that closed the other half: two
                     // 5 cm boxes 20.2 mm apart, each moving 1.8 cm toward the other, were
                     // found by neither (no rapier pair, neither fast) and ended 15.5 mm deep.
                     let fast_at = if rewind { 0.5 * prediction } else { prediction };
-                    let fast = d.length() + turn >= mesh.min_extent().min(fast_at);
+                    let fast = travelled >= mesh.min_extent().min(fast_at);
                     // A body still over the step (less than half the slop) is not read against
                     // dynamic partners, nor against fixed ones while it moved less than a tenth
                     // of the slop (the resting push's tolerance) since its pairs were last read
@@ -111,11 +112,11 @@ impl<H: PhysicsHooks> TouchPipeline<H> {
                     // since the last read, against half the slop it still reached 1.06 mm,
                     // against a quarter 1.04. (Against dynamic partners too, the measure since
                     // the last read made the pyramid stress scene's step 3-4 % dearer.)
-                    let since_read = self.pairs_read_at.get(&ch).map_or(d.length() + turn, |p| {
+                    let since_read = self.pairs_read_at.get(&ch).map_or(travelled, |p| {
                         (pose_now.translation - p.translation).length()
                             + p.rotation.angle_between(pose_now.rotation) * arm
                     });
-                    let still_step = d.length() + turn <= 0.5 * slop;
+                    let still_step = travelled <= 0.5 * slop;
                     let unmoved_since_read = since_read <= 0.1 * slop;
                     if pass == 0 && !(still_step && unmoved_since_read) {
                         self.pairs_read_at.insert(ch, pose_now);
