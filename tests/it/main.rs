@@ -38,6 +38,7 @@ mod round_tools;
 mod shape_meshes;
 mod sharp_tools;
 mod skimming;
+mod sliding_press;
 mod slow_world;
 mod spinning_drop;
 mod stress_scenes;
