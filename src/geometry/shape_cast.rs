@@ -173,10 +173,7 @@ impl Reconstructor {
                     );
                     match back {
                         Advance::Touch(s)
-                            if ((1.0 - s) - t) * speed > 2.0 * walk.touch
-                                && walk
-                                    .distance(&motion.pose_at(0.5 * (t + 1.0 - s)))
-                                    .is_none_or(|d| d <= 0.0) =>
+                            if passed_through(walk, motion, (speed, drift), (t, 1.0 - s), 3) =>
                         {
                             TouchState::Perforated
                         }
@@ -195,6 +192,50 @@ impl Reconstructor {
             }
         }
     }
+}
+
+/// Whether `moving` (along `motion`, its speed bound and drift as [`PairQuery::advance`]
+/// takes them) went into `fixed` and out again between a first touch and a last touch
+/// (`first`, `last`): it overlaps halfway between them (a shape that passed through a plate is
+/// halfway through it there), unless they are within the touch tolerance's travel of each
+/// other (a graze). Apart halfway, the stretch holds two contacts, each checked the same way
+/// (up to `splits` times deep): the last touch before the middle and the first after it
+/// bound them. A rounded box turning as it slid over a box dipped in 2.6 mm and came out,
+/// then dipped in 2.3 mm and came out again; apart halfway between its first and last touch,
+/// it was read as a graze, and left as it was.
+fn passed_through(
+    walk: &PairQuery<'_>,
+    motion: &RigidMotion,
+    (speed, drift): (Real, (Vector, Real)),
+    (first, last): (Real, Real),
+    splits: u32,
+) -> bool {
+    if (last - first) * speed <= 2.0 * walk.touch {
+        return false;
+    }
+    let mid = 0.5 * (first + last);
+    if walk.distance(&motion.pose_at(mid)).is_none_or(|d| d <= 0.0) {
+        return true;
+    }
+    if splits == 0 {
+        return false;
+    }
+    let before = match walk.advance(
+        |s| motion.pose_at(mid - s),
+        speed,
+        Some((-drift.0, drift.1)),
+        mid - first,
+    ) {
+        Advance::Touch(s) => mid - s,
+        _ => first,
+    };
+    let after = match walk.advance(|s| motion.pose_at(mid + s), speed, Some(drift), last - mid) {
+        Advance::Touch(s) => mid + s,
+        _ => last,
+    };
+    let next = (speed, drift);
+    passed_through(walk, motion, next, (first, before), splits - 1)
+        || passed_through(walk, motion, next, (after, last), splits - 1)
 }
 
 /// The single patch of a curved contact: a point with the fixed shape's normal, no features.
