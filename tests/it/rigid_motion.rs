@@ -142,49 +142,101 @@ proptest! {
         x in -3.0f32..3.0, z in -3.0f32..3.0, x0 in -90.0f32..-10.0, z0 in -90.0f32..-10.0,
         exp in -3.0f32..3.0,
     ) {
-        // Everything scaled by k (a 1 mm cube on a 0.2 m floor to a 1 km one on 200 km).
-        let k = 10f32.powf(exp);
-        let (x, z, x0, z0) = (x * k, z * k, x0 * k, z0 * k);
-        let half = 0.5 * k;
-        let cube = Cuboid::new(Vector::splat(half));
-        let moving = TouchMesh::from_shape(&cube).unwrap();
-        let side = 2.0 * x0.abs().max(z0.abs()) + 20.0 * k;
-        let floor = grid_floor(24, side / 24.0, x0, z0);
-        let start = Pose::from_translation(Vector::new(x, half, z));
-        let axis = Vector::new(axis_angle.cos(), 0.0, axis_angle.sin());
-        let end = Pose::from_parts(start.translation, Rotation::from_axis_angle(axis, turn));
-        let motion = RigidMotion::new(start, end, Vector::ZERO);
-        let c = Reconstructor::default()
-            .reconstruct_motion(&floor, &Pose::IDENTITY, &moving, &motion)
-            .unwrap();
-        // The reconstruction's tolerance is relative to the larger mesh (1e-6 of its scale by
-        // default): ten of them here, 1-2 mm on a 100-200 m floor at unit scale.
-        let eps = 1e-5 * side;
-        let corners = |p: &Pose| -> Vec<Vector> {
-            (0..8)
-                .map(|i| {
-                    let s = |b: u32| if i & b == 0 { -half } else { half };
-                    p.transform_point(Vector::new(s(1), s(2), s(4)))
-                })
-                .collect()
-        };
-        let lowest = |p: &Pose| corners(p).iter().map(|v| v.y).fold(f32::MAX, f32::min);
-        prop_assert!(lowest(&end) < -1e-3 * k, "the turn dips a corner in");
-        prop_assert!(c.needs_correction(), "{c:?}");
-        let touch = c.touch_pose;
-        let low = lowest(&touch);
-        prop_assert!(low >= -eps, "touch pose {low} m into the floor: {c:?}");
-        prop_assert!(low <= eps, "touch pose apart by {low} m: {c:?}");
-        prop_assert!(!c.patches.is_empty());
-        // Its depth: how far the touching points went past first touch, at least as far as
-        // the deepest corner now is below the floor.
-        prop_assert!(c.depth >= -lowest(&end) - eps, "depth {} for a corner {} m under: {c:?}", c.depth, -lowest(&end));
-        for p in c.patches.iter().flat_map(|p| p.points.iter()) {
-            prop_assert!(p.point.y.abs() <= eps, "contact point {} off the floor", p.point);
-            let on_cube = parry3d::query::PointQuery::distance_to_point(&cube, &touch, p.point, false);
-            prop_assert!(on_cube <= eps, "contact point {} is {on_cube} m from the cube", p.point);
-        }
+        touches_where_it_rested(axis_angle, turn, (x, z), (x0, z0), exp)?;
     }
+}
+
+/// The property above for one case: a cube of 1 m times `10^exp` resting at (`x`, `z`) on a
+/// grid floor whose corner is at (`x0`, `z0`), turned by `turn` about a horizontal axis at
+/// `axis_angle`.
+fn touches_where_it_rested(
+    axis_angle: f32,
+    turn: f32,
+    (x, z): (f32, f32),
+    (x0, z0): (f32, f32),
+    exp: f32,
+) -> Result<(), TestCaseError> {
+    // Everything scaled by k (a 1 mm cube on a 0.2 m floor to a 1 km one on 200 km).
+    let k = 10f32.powf(exp);
+    let (x, z, x0, z0) = (x * k, z * k, x0 * k, z0 * k);
+    let half = 0.5 * k;
+    let cube = Cuboid::new(Vector::splat(half));
+    let moving = TouchMesh::from_shape(&cube).unwrap();
+    let side = 2.0 * x0.abs().max(z0.abs()) + 20.0 * k;
+    let floor = grid_floor(24, side / 24.0, x0, z0);
+    let start = Pose::from_translation(Vector::new(x, half, z));
+    let axis = Vector::new(axis_angle.cos(), 0.0, axis_angle.sin());
+    let end = Pose::from_parts(start.translation, Rotation::from_axis_angle(axis, turn));
+    let motion = RigidMotion::new(start, end, Vector::ZERO);
+    let c = Reconstructor::default()
+        .reconstruct_motion(&floor, &Pose::IDENTITY, &moving, &motion)
+        .unwrap();
+    // The reconstruction's tolerance is relative to the larger mesh (1e-6 of its scale by
+    // default): ten of them here, 1-2 mm on a 100-200 m floor at unit scale.
+    let eps = 1e-5 * side;
+    let corners = |p: &Pose| -> Vec<Vector> {
+        (0..8)
+            .map(|i| {
+                let s = |b: u32| if i & b == 0 { -half } else { half };
+                p.transform_point(Vector::new(s(1), s(2), s(4)))
+            })
+            .collect()
+    };
+    let lowest = |p: &Pose| corners(p).iter().map(|v| v.y).fold(f32::MAX, f32::min);
+    prop_assert!(lowest(&end) < -1e-3 * k, "the turn dips a corner in");
+    prop_assert!(c.needs_correction(), "{c:?}");
+    let touch = c.touch_pose;
+    let low = lowest(&touch);
+    prop_assert!(low >= -eps, "touch pose {low} m into the floor: {c:?}");
+    prop_assert!(low <= eps, "touch pose apart by {low} m: {c:?}");
+    prop_assert!(!c.patches.is_empty());
+    // Its depth: how far the touching points went past first touch, at least as far as
+    // the deepest corner now is below the floor.
+    prop_assert!(
+        c.depth >= -lowest(&end) - eps,
+        "depth {} for a corner {} m under: {c:?}",
+        c.depth,
+        -lowest(&end)
+    );
+    for p in c.patches.iter().flat_map(|p| p.points.iter()) {
+        prop_assert!(
+            p.point.y.abs() <= eps,
+            "contact point {} off the floor",
+            p.point
+        );
+        let on_cube = parry3d::query::PointQuery::distance_to_point(&cube, &touch, p.point, false);
+        prop_assert!(
+            on_cube <= eps,
+            "contact point {} is {on_cube} m from the cube",
+            p.point
+        );
+    }
+    Ok(())
+}
+
+/// Known failure, kept ignored: a case the property above found at four times its cases
+/// (`PROPTEST_RNG_SEED=5136`, stop 65). The 1 m cube rests on a 6.4 m cell of the 153 m grid
+/// floor whose diagonal runs under it, and turns 0.25 rad. At its starting pose (resting,
+/// touching) the penetration test reads it crossing the floor: the floor's diagonal edge
+/// meets the plane of a side face of the cube on the cube's bottom edge, 0.27 mm from its
+/// corner, and that point lies 0.19 mm past the face's own diagonal (within the 0.22 mm
+/// tolerance, which `edges_cross_triangle` allows past a side the mesh continues flat across)
+/// and more than the tolerance inside the face triangle's other sides; the face's other
+/// triangle, on whose bottom edge the point lies, would refuse it. Read penetrating when the
+/// step began, the rotating path walks the cube back along the fallback direction (toward
+/// the floor's far centre) and out across the floor's edge, 15.4 m. Not mended: the
+/// leniency past a flat side would have to look at the triangle beyond it.
+#[test]
+#[ignore = "known failure: a cube resting on a floor's diagonal read crossing it, walked 15 m"]
+fn a_cube_resting_over_a_floor_cells_diagonal_touches_where_it_rested() {
+    touches_where_it_rested(
+        0.254_231_7,
+        0.249_568_33,
+        (1.445_356_7, 1.328_099_8),
+        (-66.277_23, -13.583_246),
+        0.0,
+    )
+    .unwrap();
 }
 
 /// A recorded step (its poses' bits, from `tests/it/spinning_drop.rs`'s 1 g box under a change
