@@ -555,4 +555,24 @@ fn a_capsule_grazing_a_huge_plate_is_pushed_out_of_it() {
     assert!(r.is_ok(), "{r:?}");
 }
 
+/// Known failure, kept ignored: a case the property above found at four times its cases
+/// (`PROPTEST_RNG_SEED=5138`, stop 65; stop 64's code fails it the same way): the convex hull
+/// 0.33 mm across, 1.6 % of its size over the 13 um plate, sliding at 10 sizes a second and
+/// coming down at 2, spinning at 10.6 rad/s, goes 0.476 of the plate's thickness into it
+/// (6.2 um; the property allows a quarter) with the hook flag; not through it. Not traced.
+#[test]
+#[ignore = "known failure: a 0.33 mm hull skimming a thin plate sinks 0.48 of its thickness in"]
+fn a_third_of_a_millimetre_hull_skimming_a_thin_plate_stays_out() {
+    let r = check_drawn(
+        50.0,
+        (
+            (5, -3.486_241_3, 0.015_883_053),
+            (10.0, 3.482_107_6, 2.013_649_2),
+            (8.051_864, -4.621_625_4, -5.051_300_5),
+            (0.162_188_23, -0.896_708_85, 0.687_612, 1.974_418),
+        ),
+    );
+    assert!(r.is_ok(), "{r:?}");
+}
+
 mod degenerate;
