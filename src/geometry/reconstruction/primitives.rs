@@ -129,13 +129,14 @@ pub(super) fn triangles_cross(
 
 /// Does an edge of `b` cross triangle `a`, with both ends farther than `tol` from its plane?
 /// The crossing point must lie inside `a` by more than `tol` from each side, except from a
-/// side marked in `flat` (its mesh goes on in the same plane there), which it may lie up to
-/// `tol` beyond. A strict test on every side missed a crossing within `tol` of a side shared
-/// by two triangles of a flat floor: both triangles refused it. A cube turning from rest on a
-/// wide floor dipped its corner 9 mm in, over such a side, and was found not penetrating there
-/// (though it was at smaller and larger turns), so the rotating path's bisection ended there
-/// (`tests/it/rigid_motion.rs`, a random case). Beyond a side where the mesh bends (or ends)
-/// the plane of `a` is not the surface, and the test stays strict.
+/// side marked in `flat` (its mesh goes on in the same plane there), which it need only be
+/// inside of (up to [`FLAT_SLACK`] of `tol` beyond, for rounding). A strict test on every side
+/// missed a crossing within `tol` of a side shared by two triangles of a flat floor: both
+/// triangles refused it. A cube turning from rest on a wide floor dipped its corner 9 mm in,
+/// over such a side, and was found not penetrating there (though it was at smaller and larger
+/// turns), so the rotating path's bisection ended there (`tests/it/rigid_motion.rs`, a random
+/// case). Beyond a side where the mesh bends (or ends) the plane of `a` is not the surface,
+/// and the test stays strict.
 pub(super) fn edges_cross_triangle(
     a: &[DVec3; 3],
     flat: [bool; 3],
@@ -164,8 +165,18 @@ pub(super) fn edges_cross_triangle(
     false
 }
 
+/// How far past a flat side (in `tol`s) a crossing point still counts as inside its triangle
+/// ([`edges_cross_triangle`]): the triangle beyond it takes points farther out. A whole `tol`
+/// let a triangle take a point its neighbour refuses: a cube resting on a grid floor had the
+/// floor's diagonal edge meet the plane of its side face on its bottom edge, 0.19 mm past that
+/// face triangle's own diagonal (tolerance 0.22 mm); the face's other triangle, on whose
+/// bottom edge the point lay, refused it, this one took it, and the resting cube read as
+/// crossing the floor (walked back 15 m, `tests/it/rigid_motion.rs`).
+const FLAT_SLACK: f64 = 1e-2;
+
 /// Is `x` (on the plane of `t`) inside `t` by more than `tol` from every edge, or no more than
-/// `tol` beyond an edge marked in `flat` (edge `k` runs from `t[k]` to `t[k + 1]`)?
+/// [`FLAT_SLACK`] of `tol` beyond an edge marked in `flat` (edge `k` runs from `t[k]` to
+/// `t[k + 1]`)?
 fn point_in_triangle_within(x: DVec3, t: &[DVec3; 3], n: DVec3, flat: [bool; 3], tol: f64) -> bool {
     for k in 0..3 {
         let (p, q) = (t[k], t[(k + 1) % 3]);
@@ -175,7 +186,7 @@ fn point_in_triangle_within(x: DVec3, t: &[DVec3; 3], n: DVec3, flat: [bool; 3],
             return false;
         }
         // Signed distance from the edge, positive inside.
-        let limit = if flat[k] { -tol } else { tol };
+        let limit = if flat[k] { -FLAT_SLACK * tol } else { tol };
         if n.cross(edge).dot(x - p) / len <= limit {
             return false;
         }
