@@ -523,3 +523,30 @@ fn a_cone_pushed_out_of_a_box_gets_a_way_out() {
     )
     .unwrap();
 }
+
+/// Known failure, kept ignored: a case the property above found at four times its cases
+/// (`PROPTEST_RNG_SEED=5136`, stop 65; the branch that answers it is as at stop 64): a cone 2.5 m across
+/// turning as it comes down onto a box ends 0.1 mm into it, within the property's touch
+/// tolerance (2.5 mm here), and the advance reads the path apart all along. The end's
+/// contact, deeper than the reconstruction's own tolerance, is pushed out along its normal
+/// (a correction off the path, 0.1 mm), where the property asks a path apart but for a touch
+/// within the tolerance at its end to be left alone. Which of the two should give was not
+/// settled.
+#[test]
+#[ignore = "known failure: a cone ending 0.1 mm into a box, within the touch band, is pushed out"]
+fn a_cone_ending_within_the_touch_band_is_left_alone() {
+    agrees_with_parry_along_the_path(
+        (4, 0.396_402_93),
+        (1.565_439_2, 0.232_874_7, 2.234_96),
+        (
+            (-1.367_710_5, 1.276_275_3, -0.558_323_5),
+            (-1.144_859_9, 0.387_514_23, -0.579_217_8),
+        ),
+        (
+            (1.805_790_2, -1.913_505_3, -1.157_792_6),
+            (0.915_115, -2.396_602_4, 0.360_048_77),
+        ),
+        (0.051_056_71, 0.088_275_366, 0.027_063_36),
+    )
+    .unwrap();
+}
