@@ -318,6 +318,16 @@ fn a_heavy_u_dropped_into_a_deep_funnel_stays_on_the_plate() {
     check_drawn(Body::U, 0.893_265, 1.162_504_8, 1.621_358_9, true).unwrap();
 }
 
+/// Known failure, kept ignored: a fourth of that kind (`PROPTEST_RNG_SEED=5139` of the
+/// compounds' property below at four times its cases, stop 65; stop 64's code fails it the
+/// same way): a 2.3 kg U dropped 1.34 m onto a plate of 22.4 N/m edges, one substep, goes
+/// through. Not traced.
+#[test]
+#[ignore = "known failure: a heavy U sinking into a deep funnel goes through the plate"]
+fn a_u_dropped_on_a_soft_plate_at_one_substep_stays_on_it() {
+    check_drawn(Body::U, 0.360_463_74, 1.343_368_9, 1.351_124_3, false).unwrap();
+}
+
 /// Found by the compounds' property below at four times its cases (`PROPTEST_RNG_SEED=5127`;
 /// kept ignored at stop 63): an 11.8 g U dropped 7.6 cm onto a plate of 118 N/m edges, 17
 /// substeps, rests on six contacts for 9 s and was then kicked at step 562: a plate triangle
