@@ -371,14 +371,15 @@ impl MassSpringSurface {
         on_vertex.sort_unstable_by_key(|e| (e.0, e.1));
         for run in on_vertex.chunk_by(|x, y| x.0 == y.0) {
             let im = inv_mass(self, run[0].0);
-            let sliding = slide(self, run[0].0).filter(|_| im == 0.0);
-            let im_sliding = 1.0 / self.mass[run[0].0 as usize];
+            // (A vertex on a sliding hold is held: `inv_mass` gives it none.)
+            let sliding = slide(self, run[0].0);
             for &(_, i, wi) in run {
                 for &(_, j, wj) in run {
                     let (ni, nj) = (kept[i].0.normal, kept[j].0.normal);
                     a[(i, j)] += match sliding {
                         Some(m) if slides[i] && slides[j] => {
-                            across(m, ni).dot(across(m, nj)) * wi * wj * im_sliding
+                            across(m, ni).dot(across(m, nj)) * wi * wj
+                                / self.mass[run[0].0 as usize]
                         }
                         _ => ni.dot(nj) * wi * wj * im,
                     };
@@ -407,7 +408,7 @@ impl MassSpringSurface {
                     // The way the press moves the vertex per unit impulse: along its normal,
                     // or across a sliding hold's normal for a press that slides it.
                     let way = match slide(self, v) {
-                        Some(m) if im == 0.0 && slides[i] => {
+                        Some(m) if slides[i] => {
                             across(m, hold.normal) * (w / self.mass[v as usize])
                         }
                         _ => hold.normal * (w * im),
