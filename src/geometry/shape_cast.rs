@@ -122,15 +122,39 @@ impl Reconstructor {
         match first {
             Advance::Unsupported => Ok(None),
             // In contact when the step began: no first touch on this path, the way out is
-            // along the contact normal at the pose now. So too for a path read apart all along
-            // whose end overlaps (closer than the touch tolerance there, it only touches): the
-            // advance's bound on parry's distance missed the touch (a 13 m cone tumbling onto
-            // a plate 50 times its size, 0.34 m deep at the end, was read apart all along and
-            // left there), and no first touch is known on the path.
+            // along the contact normal at the pose now. A path read apart all along whose end
+            // overlaps (closer than the touch tolerance there, it only touches) is one where
+            // the advance's bound on parry's distance missed the touch (a 13 m cone tumbling
+            // onto a plate 50 times its size, 0.34 m deep at the end, was read apart all along
+            // and left there): its crossing is looked for on the path (below), and the way out
+            // is along the normal only where none is found.
             Advance::Apart | Advance::InContact => {
                 let Some(c) = walk.contact(&end) else {
                     return Ok(Some(result));
                 };
+                // Read apart all along but overlapping at the end: the path crosses into
+                // `fixed` somewhere the advance's bound missed. Apart at the start, the
+                // crossing is found on the path itself (bisection on parry's distance) and
+                // walked back to, as a first touch the advance found would be.
+                if matches!(first, Advance::Apart) && c.dist < -tol {
+                    if let Some(t) = crossing(walk, motion, speed) {
+                        let touch = motion.pose_at(t);
+                        if let Some(c) = walk.contact(&touch) {
+                            let witness = touch.inverse_transform_point(c.point2);
+                            let travelled = (end.transform_point(witness)
+                                - touch.transform_point(witness))
+                            .length();
+                            result.patches.push(vertex_patch(c.point1, c.normal1));
+                            result.state = TouchState::Penetrating;
+                            result.on_trajectory = true;
+                            result.time_of_impact = Some(t);
+                            result.touch_pose = touch;
+                            result.reversing_vector = touch.translation - end.translation;
+                            result.depth = travelled.max(result.reversing_vector.length());
+                            return Ok(Some(result));
+                        }
+                    }
+                }
                 result.patches.push(vertex_patch(c.point1, c.normal1));
                 if c.dist < -tol {
                     result.state = TouchState::Penetrating;
@@ -236,6 +260,34 @@ fn passed_through(
     let next = (speed, drift);
     passed_through(walk, motion, next, (first, before), splits - 1)
         || passed_through(walk, motion, next, (after, last), splits - 1)
+}
+
+/// Where `motion`, apart from `walk`'s fixed shape at its start and overlapping it at its end,
+/// crosses into it: the last time found apart by bisection on parry's distance, within the
+/// touch tolerance's travel of an overlapping one (`speed` bounds any point's travel per unit
+/// of `t`). `None` when the start is not apart or a distance is not answered.
+fn crossing(walk: &PairQuery<'_>, motion: &RigidMotion, speed: Real) -> Option<Real> {
+    let (mut lo, mut hi) = (0.0, 1.0);
+    if walk.distance(&motion.pose_at(lo))? <= 0.0 {
+        return None;
+    }
+    // Halving 1 down to the touch tolerance's share of the travel; 60 halvings at most
+    // (beyond f32's resolution of `t`).
+    for _ in 0..60 {
+        if (hi - lo) * speed <= walk.touch {
+            break;
+        }
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if walk.distance(&motion.pose_at(mid))? > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(lo)
 }
 
 /// The single patch of a curved contact: a point with the fixed shape's normal, no features.

@@ -519,7 +519,8 @@ fn small_bodies_stay_on_thin_plates() {
 /// cases): the walk along its path (conservative advancement on parry's distance) read the pair
 /// apart all along while the cone ended 0.34 m (0.63 thicknesses) into the plate, and the
 /// reconstruction called it touching, so the guard left it there. A path read apart that
-/// overlaps at its end is now pushed out along the contact normal at the pose now
+/// overlaps at its end was then pushed out along the contact normal at the pose now; since
+/// stop 66 it is walked back to where the path crosses into the plate
 /// (`Reconstructor::reconstruct_shapes`): within a quarter of the thickness in both modes.
 #[test]
 fn a_cone_the_walk_read_apart_is_pushed_out() {
