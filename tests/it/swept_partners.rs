@@ -208,3 +208,15 @@ fn a_fast_box_landing_on_forty_one_tiles_stays_within_the_bound() {
     let worst = run(41, 0.209_910_66, 23.393_47, 0.0, false);
     assert!(worst <= BOUND, "{worst} m deep");
 }
+
+/// Known failure, kept ignored: found by the property above at four times its cases
+/// (`PROPTEST_RNG_SEED=5141`, stop 66), tracked: a 51 cm box dropped at 11.3 m/s onto 15 tiles
+/// ends 1.015 mm into them, over the 1 mm bound; likely the case above's (calm pairs read from
+/// rapier's points), not traced. Stop 66's one change to the reconstruction (a path read apart
+/// that overlaps at its end) is not on its path: instrumented, that branch never ran here.
+#[test]
+#[ignore = "known failure: a box dropped at 11 m/s on 15 tiles ends 1.015 mm into them"]
+fn a_box_landing_on_fifteen_tiles_stays_within_the_bound() {
+    let worst = run(15, 0.254_834_26, 11.329_315, 0.0, false);
+    assert!(worst <= BOUND, "{worst} m deep");
+}
