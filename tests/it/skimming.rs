@@ -556,19 +556,16 @@ fn a_capsule_grazing_a_huge_plate_is_pushed_out_of_it() {
     assert!(r.is_ok(), "{r:?}");
 }
 
-/// Known failure, kept ignored: a case the property above found at four times its cases
-/// (`PROPTEST_RNG_SEED=5138`, stop 65; stop 64's code fails it the same way): the convex hull
-/// 0.33 mm across, 1.6 % of its size over the 13 um plate, sliding at 10 sizes a second and
-/// coming down at 2, spinning at 10.6 rad/s, goes 0.476 of the plate's thickness into it
-/// (6.2 um; the property allows a quarter) with the hook flag; not through it. Traced (stop
-/// 66): after a correction at step 45, rapier's manifold for the pair has a normal 47° off the
-/// plate's, (-0.52, 0.68, 0.52), and reads the hull 3 um apart at every point while it falls
-/// freely 1.4, 3.3 and 6.2 um into the plate over the next three steps; the guard takes those
-/// points as the pair's depth (`slow_pair_calm`) and leaves it. Distrusting points whose
-/// normal the shapes overlap along by far more than they say found the pair, but the guard's
-/// later branches then reported it without correcting it (1.55 thicknesses in); not kept.
+/// A case the property above found at four times its cases (`PROPTEST_RNG_SEED=5138`, stop
+/// 65; stop 64's code failed it the same way): the convex hull 0.33 mm across, 1.6 % of its
+/// size over the 13 um plate, sliding at 10 sizes a second and coming down at 2, spinning at
+/// 10.6 rad/s, went 0.476 of the plate's thickness into it (6.2 um; the property allows a
+/// quarter) with the hook flag. After a correction at step 45, rapier's manifold for the pair
+/// held a normal 47° off the plate's, (-0.52, 0.68, 0.52), and read the hull 3 um apart at
+/// every point while it fell freely into the plate over three steps; the guard took those
+/// points as the pair's depth and read it calm. Points along a normal the shapes overlap along
+/// by more than the mover's size past what they say are no longer trusted (stop 66).
 #[test]
-#[ignore = "known failure: a 0.33 mm hull skimming a thin plate sinks 0.48 of its thickness in"]
 fn a_third_of_a_millimetre_hull_skimming_a_thin_plate_stays_out() {
     let r = check_drawn(
         50.0,
