@@ -234,12 +234,13 @@ impl PairView {
         // support queries; a normal recycled from a 3° tilt of a 57 cm box stays trusted).
         let wrong_normal = || {
             rapier.is_some_and(|r| {
+                let allowed = r.depth.max(0.0) + slop + prediction + mover.mesh.min_extent();
                 overlap_along(
                     (partner, &partner_pose),
                     (mover.collider, &mover.pose),
                     r.normal,
                 )
-                .is_some_and(|o| o > r.depth.max(0.0) + slop + prediction + mover.mesh.min_extent())
+                .is_some_and(|o| o > allowed)
             })
         };
         PairView {
