@@ -209,17 +209,14 @@ fn a_fast_box_landing_on_forty_one_tiles_stays_within_the_bound() {
     assert!(worst <= BOUND, "{worst} m deep");
 }
 
-/// Known failure, kept ignored: found by the property above at four times its cases
-/// (`PROPTEST_RNG_SEED=5141`, stop 66), tracked: a 51 cm box dropped at 11.3 m/s onto 15 tiles
-/// ends 1.015 mm into them, over the 1 mm bound. Stop 66's one change to the reconstruction (a
-/// path read apart that overlaps at its end) is not on its path: instrumented, that branch
-/// never ran here. Traced (parry's depth after every step): the box comes to rest across two
-/// tiles by step 12; rapier's soft contact sinks it 0.08-0.1 mm a step, and the guard pushes
-/// it back to the 0.90 mm resting slop at one or two steps of every three or four, making none
-/// at the others, where it reads 0.99-1.015 mm (the two worst at steps 18 and 32). Why the
-/// guard reads those steps calm was not traced further.
+/// Found by the property above at four times its cases (`PROPTEST_RNG_SEED=5141`, stop 66),
+/// tracked: a 51 cm box dropped at 11.3 m/s onto 15 tiles ended 1.015 mm into them, over the
+/// 1 mm bound. At rest across two tiles, rapier's soft contact sank it 0.08-0.1 mm a step and
+/// the guard pushed it back to the 0.90 mm resting slop; the step after a push it was skipped
+/// as a still body unmoved since its pairs were last read, measured from the pose the guard
+/// had pushed it back from, and read 0.99-1.015 mm there. A body the guard moves now has that
+/// pose forgotten, and its next step's motion is measured.
 #[test]
-#[ignore = "known failure: a box dropped at 11 m/s on 15 tiles ends 1.015 mm into them"]
 fn a_box_landing_on_fifteen_tiles_stays_within_the_bound() {
     let worst = run(15, 0.254_834_26, 11.329_315, 0.0, false);
     assert!(worst <= BOUND, "{worst} m deep");
