@@ -328,6 +328,16 @@ fn a_u_dropped_on_a_soft_plate_at_one_substep_stays_on_it() {
     check_drawn(Body::U, 0.360_463_74, 1.343_368_9, 1.351_124_3, false).unwrap();
 }
 
+/// Known failure, kept ignored: a fifth of that kind (`PROPTEST_RNG_SEED=5144` of the
+/// compounds' property below at four times its cases, stop 66; stop 65's code fails it the
+/// same way, rebuilt and run): a 7.0 kg U dropped 0.98 m onto a plate of 22.2 N/m edges, 17
+/// substeps, goes through. Not traced.
+#[test]
+#[ignore = "known failure: a heavy U sinking into a deep funnel goes through the plate"]
+fn a_seven_kilogram_u_dropped_on_a_soft_plate_stays_on_it() {
+    check_drawn(Body::U, 0.847_063_54, 0.982_489_5, 1.345_696, true).unwrap();
+}
+
 /// Found by the compounds' property below at four times its cases (`PROPTEST_RNG_SEED=5127`;
 /// kept ignored at stop 63): an 11.8 g U dropped 7.6 cm onto a plate of 118 N/m edges, 17
 /// substeps, rests on six contacts for 9 s and was then kicked at step 562: a plate triangle

@@ -347,6 +347,27 @@ fn books_kept(
     Ok(())
 }
 
+/// Known failure, kept ignored: a case the property test above found at four times its cases
+/// (`PROPTEST_RNG_SEED=5144`, stop 66; stop 65's code fails it the same way, rebuilt and run):
+/// a 2.9 g body of kind 4 spinning at 2.1 rad/s meets a free 13 g plate of 953 N/m at 1.4 m/s,
+/// one substep: the kinetic energy stays within the 2.89 mJ it started with, but kinetic plus
+/// the springs' reads 4.09 mJ (+41 %). Not traced.
+#[test]
+#[ignore = "known failure: a light body thrown at a light stiff plate stores energy it did not pay"]
+fn a_light_body_thrown_at_a_light_stiff_plate_stores_no_energy_it_has_not_paid_for() {
+    let (p0, p1, e0, (kinetic, total), moved) = thrown(
+        tool(4, 0.25),
+        10f32.powf(-2.536_522_2),
+        10f32.powf(-1.889_038_1),
+        10f32.powf(2.979_137),
+        10f32.powf(0.146_206_42),
+        1,
+        2.082_452_3,
+    );
+    assert!(moved);
+    books_kept((p0, p1), e0, (kinetic, total)).unwrap();
+}
+
 /// A case the property test above found at 96 cases with `PROPTEST_RNG_SEED=5102` (on the
 /// code before stop 60 too). A 2.3 g cube (6 cm) spinning at 3.8 rad/s, mostly about the
 /// vertical, meets a free 1 kg plate of 127 N/m at 5 cm/s, one substep at 60 Hz. At its first
