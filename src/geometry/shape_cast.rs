@@ -140,17 +140,9 @@ impl Reconstructor {
                     if let Some(t) = crossing(walk, motion, speed) {
                         let touch = motion.pose_at(t);
                         if let Some(c) = walk.contact(&touch) {
-                            let witness = touch.inverse_transform_point(c.point2);
-                            let travelled = (end.transform_point(witness)
-                                - touch.transform_point(witness))
-                            .length();
                             result.patches.push(vertex_patch(c.point1, c.normal1));
                             result.state = TouchState::Penetrating;
-                            result.on_trajectory = true;
-                            result.time_of_impact = Some(t);
-                            result.touch_pose = touch;
-                            result.reversing_vector = touch.translation - end.translation;
-                            result.depth = travelled.max(result.reversing_vector.length());
+                            walk_back_to(&mut result, (t, touch), &end, c.point2);
                             return Ok(Some(result));
                         }
                     }
@@ -173,9 +165,6 @@ impl Reconstructor {
                     return Ok(None);
                 };
                 result.patches.push(vertex_patch(c.point1, c.normal1));
-                let witness = touch.inverse_transform_point(c.point2);
-                let travelled =
-                    (end.transform_point(witness) - touch.transform_point(witness)).length();
                 let penetrating = walk.contact(&end).is_some_and(|c| c.dist < -tol);
                 result.state = if penetrating {
                     TouchState::Penetrating
@@ -206,11 +195,7 @@ impl Reconstructor {
                     }
                 };
                 if result.needs_correction() {
-                    result.on_trajectory = true;
-                    result.time_of_impact = Some(t);
-                    result.touch_pose = touch;
-                    result.reversing_vector = touch.translation - end.translation;
-                    result.depth = travelled.max(result.reversing_vector.length());
+                    walk_back_to(&mut result, (t, touch), &end, c.point2);
                 }
                 Ok(Some(result))
             }
@@ -267,27 +252,29 @@ fn passed_through(
 /// touch tolerance's travel of an overlapping one (`speed` bounds any point's travel per unit
 /// of `t`). `None` when the start is not apart or a distance is not answered.
 fn crossing(walk: &PairQuery<'_>, motion: &RigidMotion, speed: Real) -> Option<Real> {
-    let (mut lo, mut hi) = (0.0, 1.0);
-    if walk.distance(&motion.pose_at(lo))? <= 0.0 {
+    if walk.distance(&motion.pose_at(0.0))? <= 0.0 {
         return None;
     }
-    // Halving 1 down to the touch tolerance's share of the travel; 60 halvings at most
-    // (beyond f32's resolution of `t`).
-    for _ in 0..60 {
-        if (hi - lo) * speed <= walk.touch {
-            break;
-        }
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if walk.distance(&motion.pose_at(mid))? > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Some(lo)
+    walk.last_apart(|t| motion.pose_at(t), speed, (0.0, 1.0))
+}
+
+/// Sets `result` to be walked back along `motion` to its first touch at `t`: the touch pose,
+/// the translation back to it from the pose now (`end`), and the depth, at least how far the
+/// point of the moving shape that touches there (`witness`, world, at the touch) travelled
+/// since.
+fn walk_back_to(
+    result: &mut ContactConfiguration,
+    (t, touch): (Real, Pose),
+    end: &Pose,
+    witness: Vector,
+) {
+    let local = touch.inverse_transform_point(witness);
+    let travelled = (end.transform_point(local) - touch.transform_point(local)).length();
+    result.on_trajectory = true;
+    result.time_of_impact = Some(t);
+    result.touch_pose = touch;
+    result.reversing_vector = touch.translation - end.translation;
+    result.depth = travelled.max(result.reversing_vector.length());
 }
 
 /// The single patch of a curved contact: a point with the fixed shape's normal, no features.

@@ -365,6 +365,30 @@ impl<'a> PairQuery<'a> {
         (c.dist.is_finite() && c.normal1.is_finite()).then_some(Some(c))
     }
 
+    /// The last time of `[lo, hi]` found apart along `pose_at` (`lo` apart, `hi` overlapping),
+    /// by bisection on parry's distance, whose overlap test holds where its distance does not,
+    /// down to the touch tolerance's travel at `speed` (any point's travel per unit of time;
+    /// at most [`MAX_ADVANCES`] halvings). `None` where parry answers no distance.
+    pub(super) fn last_apart(
+        &self,
+        pose_at: impl Fn(Real) -> Pose,
+        speed: Real,
+        (mut lo, mut hi): (Real, Real),
+    ) -> Option<Real> {
+        for _ in 0..MAX_ADVANCES {
+            if (hi - lo) * speed <= self.touch {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            if self.distance(&pose_at(mid))? > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(lo)
+    }
+
     /// Conservative advancement (Mirtich) along `pose_at` over `[0, until]`: at a distance `d`
     /// nothing of `moving` can reach `fixed` sooner than `d / speed`, where `speed` bounds how
     /// fast any of its points moves; advancing by that much never steps past the first touch,
@@ -403,19 +427,10 @@ impl<'a> PairQuery<'a> {
                 // a support map jumps: 5.2e-4 answered for 1e-4 at a cone's rim). Between the
                 // last pose found apart and this one the motion is short: bisect on GJK's
                 // overlap test, which does not suffer from that, down to the touch tolerance.
-                let (mut lo, mut hi) = (apart, t);
-                for _ in 0..MAX_ADVANCES {
-                    if (hi - lo) * speed <= self.touch {
-                        break;
-                    }
-                    let mid = 0.5 * (lo + hi);
-                    match self.distance(&pose_at(mid)) {
-                        Some(d) if d > 0.0 => lo = mid,
-                        Some(_) => hi = mid,
-                        None => return Advance::Unsupported,
-                    }
-                }
-                return Advance::Touch(lo);
+                return match self.last_apart(&pose_at, speed, (apart, t)) {
+                    Some(lo) => Advance::Touch(lo),
+                    None => Advance::Unsupported,
+                };
             }
             if speed <= 0.0 {
                 return Advance::Apart;

@@ -232,15 +232,22 @@ impl PairView {
         // 13 um plate 100 times its size held a normal 47° off the plate's and read the hull
         // 3 um apart while it fell 6.2 um into the plate over three steps, read calm (two
         // support queries; a normal recycled from a 3° tilt of a 57 cm box stays trusted).
-        let wrong_normal = || {
-            rapier.is_some_and(|r| {
-                let allowed = r.depth.max(0.0) + slop + prediction + mover.mesh.min_extent();
+        // The shapes' overlap along rapier's normal, asked at most once (the corner reach
+        // below bounds itself by it too).
+        let overlap = std::cell::OnceCell::new();
+        let normal_overlap = |r: &RapierContact| {
+            *overlap.get_or_init(|| {
                 overlap_along(
                     (partner, &partner_pose),
                     (mover.collider, &mover.pose),
                     r.normal,
                 )
-                .is_some_and(|o| o > allowed)
+            })
+        };
+        let wrong_normal = || {
+            rapier.is_some_and(|r| {
+                let allowed = r.depth.max(0.0) + slop + prediction + mover.mesh.min_extent();
+                normal_overlap(&r).is_some_and(|o| o > allowed)
             })
         };
         PairView {
@@ -269,12 +276,7 @@ impl PairView {
                     // Shapes with support points: their overlap along rapier's normal bounds
                     // the depth too (two support queries).
                     if r.depth + reach > slop {
-                        overlap_along(
-                            (partner, &partner_pose),
-                            (mover.collider, &mover.pose),
-                            r.normal,
-                        )
-                        .map_or(reach, |o| reach.min((o - r.depth).max(0.0)))
+                        normal_overlap(&r).map_or(reach, |o| reach.min((o - r.depth).max(0.0)))
                     } else {
                         reach
                     }
